@@ -1,0 +1,3 @@
+"""mediated-transfer: skill transfer for mediated interaction learning, reproduced."""
+
+__version__ = "0.1.0"

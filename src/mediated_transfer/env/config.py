@@ -1,0 +1,87 @@
+"""Every geometric and physical constant of the simulated world, in one place.
+
+The paper fixes the interaction range (radius 10), the move length (one unit), the rotation step
+(pi/4), the episode length (100), the reward (10) and the action noise (0.1). Everything else it
+leaves open; the defaults below are this project's choices, exposed as ``conf/env/``, and the
+tests check that both source and target tasks stay solvable by a scripted policy with them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    # --- fixed by the paper -------------------------------------------------------------
+    interaction_radius: float = 10.0
+    """Agent's reach around the origin O: only picking locations inside it can be picked."""
+    move_distance: float = 1.0
+    """Distance the active picking location moves per move action."""
+    rotation_angle: float = math.pi / 4
+    """Tool rotation per rotate action, around the active picking location."""
+    max_episode_steps: int = 100
+    """Episode truncation."""
+    success_reward: float = 10.0
+    """Reward on success (the episode then terminates); 0 otherwise."""
+    action_noise: float = 0.1
+    """Probability that a uniformly random action replaces the chosen one (also in evaluation)."""
+
+    # --- chosen by this project -----------------------------------------------------------
+    goal_radius: float = 2.0
+    """Success when the target's centre lies within this distance of O."""
+    world_radius: float = 18.0
+    """A circular wall at this radius keeps objects (and so the observation) bounded."""
+    target_radius: float = 1.0
+    """Radius of the disc-shaped target object."""
+    tool_handle_length: float = 7.0
+    """Length of the L's long arm, from the corner M2 to the handle end M1."""
+    tool_hook_length: float = 3.5
+    """Length of the L's short arm, from the corner M2 to the hook end M3."""
+    tool_width: float = 0.5
+    """Thickness of both arms of the tool."""
+    mediated_min_distance: float = 11.5
+    """Target tasks place the target's centre at least this far from O (out of reach)."""
+    mediated_max_distance: float = 13.5
+    """... and at most this far."""
+    step_duration: float = 1.0
+    """Simulated seconds per environment step (a move covers move_distance in this time)."""
+    substeps: int = 10
+    """pymunk ``space.step`` calls per environment step (keeps a pi/4 sweep from tunnelling)."""
+    damping: float = 0.05
+    """Fraction of linear and angular velocity kept after one simulated second (no friction)."""
+    target_mass: float = 1.0
+    tool_mass: float = 1.0
+
+    def __post_init__(self) -> None:
+        positive = [f.name for f in fields(self) if f.name not in ("action_noise", "damping")]
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ValueError(f"env.{name} must be > 0, got {getattr(self, name)!r}")
+        if not 0.0 <= self.action_noise <= 1.0:
+            raise ValueError(f"env.action_noise must lie in [0, 1], got {self.action_noise!r}")
+        if not 0.0 < self.damping <= 1.0:
+            raise ValueError(f"env.damping must lie in (0, 1], got {self.damping!r}")
+        if not self.goal_radius < self.interaction_radius:
+            raise ValueError("env.goal_radius must be smaller than env.interaction_radius")
+        if not self.interaction_radius < self.mediated_min_distance <= self.mediated_max_distance:
+            raise ValueError(
+                "env.mediated_min_distance must exceed env.interaction_radius and not exceed "
+                "env.mediated_max_distance"
+            )
+        if not self.mediated_max_distance + self.target_radius < self.world_radius:
+            raise ValueError("env.world_radius must enclose the mediated annulus plus the target")
+
+    @property
+    def max_target_distance(self) -> float:
+        """Upper bound of |M_i T| (both points lie inside the wall)."""
+        return 2.0 * self.world_radius
+
+    @property
+    def max_origin_distance(self) -> float:
+        """Upper bound of |M_i O|."""
+        return self.world_radius
+
+    def to_dict(self) -> dict:
+        return asdict(self)

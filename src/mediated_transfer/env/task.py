@@ -1,0 +1,169 @@
+"""Task instances c = (s, t) and the random source/target task samplers.
+
+A task is given by its task-space coordinates t (target position, tool pose); its sensor vector
+s is eq. (2) of the paper at the episode's start, when the agent's active picking location is
+the origin O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import WorldConfig
+
+# Order of the picking locations: the one-hot A_pos of eq. (2) and the pick actions use it.
+PICKING_LOCATIONS = ("M1", "M2", "M3", "T", "O")
+M1, M2, M3, T, O = range(5)
+SCENARIOS = ("source", "target")
+
+#: Sensor vector layout (eq. 2): |M1T| |M2T| |M3T| |M1O| |M2O| |M3O| then the 5-dim one-hot.
+NUM_DISTANCES = 6
+OBSERVATION_SIZE = NUM_DISTANCES + len(PICKING_LOCATIONS)
+
+
+def tool_picking_locations(tool_position, tool_angle: float, config: WorldConfig) -> np.ndarray:
+    """M1 (handle end), M2 (the L's corner, its middle) and M3 (hook end) in world coordinates.
+
+    The tool frame has its origin at the corner M2, the handle along its x axis and the hook
+    along its y axis; ``tool_angle`` is the world angle of that x axis.
+    """
+    cx, cy = tool_position
+    c, s = math.cos(tool_angle), math.sin(tool_angle)
+    lh, lk = config.tool_handle_length, config.tool_hook_length
+    return np.array([[cx + lh * c, cy + lh * s], [cx, cy], [cx - lk * s, cy + lk * c]])
+
+
+def sensor_vector(
+    tool_locations: np.ndarray, target_position, active: int = O
+) -> np.ndarray:
+    """Eq. (2): distances M_i-T, M_i-O and the one-hot of the active picking location."""
+    obs = np.zeros(OBSERVATION_SIZE)
+    tx, ty = target_position
+    for i in range(3):
+        x, y = tool_locations[i]
+        obs[i] = math.hypot(x - tx, y - ty)
+        obs[3 + i] = math.hypot(x, y)
+    obs[NUM_DISTANCES + active] = 1.0
+    return obs
+
+
+def _segment_distance(p, a, b) -> float:
+    ab = b - a
+    t = float(np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0.0, 1.0))
+    return float(np.linalg.norm(p - (a + t * ab)))
+
+
+@dataclass(frozen=True)
+class Task:
+    """One task instance in task-space coordinates t = (target x, y, tool corner x, y, angle)."""
+
+    target_position: tuple[float, float]
+    tool_position: tuple[float, float]
+    tool_angle: float
+
+    @property
+    def coordinates(self) -> np.ndarray:
+        """t as a flat vector."""
+        return np.array([*self.target_position, *self.tool_position, self.tool_angle])
+
+    @classmethod
+    def from_coordinates(cls, t) -> "Task":
+        t = [float(v) for v in t]
+        if len(t) != 5:
+            raise ValueError(f"a task has 5 task-space coordinates, got {len(t)}")
+        return cls((t[0], t[1]), (t[2], t[3]), t[4])
+
+    def picking_locations(self, config: WorldConfig = WorldConfig()) -> np.ndarray:
+        """The five picking locations M1, M2, M3, T, O (shape 5 x 2)."""
+        tool = tool_picking_locations(self.tool_position, self.tool_angle, config)
+        return np.vstack([tool, [self.target_position], [[0.0, 0.0]]])
+
+    def sensor_vector(self, config: WorldConfig = WorldConfig()) -> np.ndarray:
+        """s: the observation at the start of an episode on this task (active location O)."""
+        tool = tool_picking_locations(self.tool_position, self.tool_angle, config)
+        return sensor_vector(tool, self.target_position, O)
+
+    @property
+    def target_distance(self) -> float:
+        return math.hypot(*self.target_position)
+
+    def problems(self, config: WorldConfig = WorldConfig()) -> list[str]:
+        """Why this task cannot start an episode (empty when it can)."""
+        out = []
+        values = self.coordinates
+        if not np.all(np.isfinite(values)):
+            out.append(f"task coordinates must be finite, got {values.tolist()}")
+            return out
+        locs = self.picking_locations(config)
+        target = locs[T]
+        limit = config.world_radius - config.target_radius
+        if np.linalg.norm(target) > limit:
+            out.append(f"target centre lies outside the world (|T| > {limit:g})")
+        tool_limit = config.world_radius - config.tool_width / 2
+        if np.any(np.linalg.norm(locs[:3], axis=1) > tool_limit):
+            out.append(f"tool lies outside the world (a picking location beyond {tool_limit:g})")
+        clearance = config.target_radius + config.tool_width / 2
+        gap = min(_segment_distance(target, locs[M2], locs[M1]),
+                  _segment_distance(target, locs[M2], locs[M3]))
+        if gap < clearance:
+            out.append(f"target and tool overlap (gap {gap:.3f} < {clearance:g})")
+        return out
+
+    def validate(self, config: WorldConfig = WorldConfig()) -> "Task":
+        problems = self.problems(config)
+        if problems:
+            raise ValueError("invalid task " + repr(self) + ": " + "; ".join(problems))
+        return self
+
+
+def _uniform_in_annulus(rng: np.random.Generator, r_min: float, r_max: float) -> tuple[float, float]:
+    # Area-uniform: the radius' square is uniform.
+    r = math.sqrt(rng.uniform(r_min * r_min, r_max * r_max))
+    phi = rng.uniform(0.0, 2.0 * math.pi)
+    return (r * math.cos(phi), r * math.sin(phi))
+
+
+def _sample_tool_in_range(rng: np.random.Generator, config: WorldConfig):
+    # Uniform corner in the range and uniform angle, kept when all three picking locations
+    # are reachable (so the whole tool, a convex hull of them, lies inside the range).
+    while True:
+        position = _uniform_in_annulus(rng, 0.0, config.interaction_radius)
+        angle = float(rng.uniform(-math.pi, math.pi))
+        locs = tool_picking_locations(position, angle, config)
+        if np.all(np.hypot(locs[:, 0], locs[:, 1]) <= config.interaction_radius):
+            return position, angle
+
+
+def sample_task(scenario: str, rng: np.random.Generator, config: WorldConfig = WorldConfig()) -> Task:
+    """A random task of a scenario.
+
+    source ("single-object interaction"): target and tool uniformly inside the interaction
+    range, the target outside the goal area. target ("mediated interaction", extension of
+    reach): the target uniformly in the annulus [mediated_min_distance, mediated_max_distance],
+    out of reach; the tool inside the range.
+    """
+    if scenario not in SCENARIOS:
+        raise ValueError(f"unknown scenario {scenario!r}; allowed: {', '.join(SCENARIOS)}")
+    while True:
+        if scenario == "source":
+            # Keep the whole target disc inside the range and out of the goal area.
+            target = _uniform_in_annulus(
+                rng, config.goal_radius, config.interaction_radius - config.target_radius
+            )
+        else:
+            target = _uniform_in_annulus(
+                rng, config.mediated_min_distance, config.mediated_max_distance
+            )
+        position, angle = _sample_tool_in_range(rng, config)
+        task = Task(target, position, angle)
+        if not task.problems(config):
+            return task
+
+
+def sample_tasks(
+    scenario: str, n: int, rng: np.random.Generator, config: WorldConfig = WorldConfig()
+) -> list[Task]:
+    return [sample_task(scenario, rng, config) for _ in range(n)]

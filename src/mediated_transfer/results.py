@@ -1,0 +1,81 @@
+"""What one learning run leaves in its output folder: the source of truth for every table.
+
+``result.json`` holds the run's identity, its resolved config and its metrics;
+``curve.csv`` holds the evaluation curve (learning step, mean reward <R>, success rate).
+Both are written atomically (temporary file, then rename), so an interrupted run never leaves
+a half-written result that a later sweep would mistake for a finished one.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+RESULT_FILE = "result.json"
+CURVE_FILE = "curve.csv"
+
+
+@dataclass
+class RunResult:
+    algorithm: str
+    representation: str
+    strategy: str
+    n_source: int
+    seed: int
+    budget: int
+    """Learning steps of the run (source and target episodes together)."""
+    steps: list[int]
+    """Learning steps at which the target task was evaluated."""
+    mean_reward: list[float]
+    """<R> at each evaluation point."""
+    success_rate: list[float]
+    reward_loss: float
+    """L_R = sum_i (R_max - <R_i>)."""
+    time_to_threshold: int | None
+    """First evaluation step from which this run's curve stays >= the threshold; None: never."""
+    source_phase_end: int | None
+    """Learning step at which the last source task was solved; None: never (or N_source=0)."""
+    source_tasks_solved: int
+    wall_time_s: float
+    learning_steps_per_s: float
+    learner_stats: dict[str, float] = field(default_factory=dict)
+    config: dict[str, Any] = field(default_factory=dict)
+    """The resolved config of the run."""
+
+    def write(self, folder: str | os.PathLike) -> Path:
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        lines = ["step,mean_reward,success_rate"]
+        lines += [f"{s},{r!r},{p!r}" for s, r, p in zip(self.steps, self.mean_reward, self.success_rate)]
+        _atomic_write(folder / CURVE_FILE, "\n".join(lines) + "\n")
+        # result.json last: its presence marks the run as finished.
+        _atomic_write(folder / RESULT_FILE, json.dumps(asdict(self), indent=2, default=_plain) + "\n")
+        return folder / RESULT_FILE
+
+    @classmethod
+    def read(cls, folder: str | os.PathLike) -> "RunResult":
+        data = json.loads((Path(folder) / RESULT_FILE).read_text())
+        return cls(**data)
+
+    @staticmethod
+    def exists(folder: str | os.PathLike) -> bool:
+        return (Path(folder) / RESULT_FILE).is_file()
+
+
+def _plain(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
