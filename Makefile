@@ -30,3 +30,23 @@ test: $(STAMP) ## Run the test suite (creates the environment first)
 
 bench: $(BENCH_STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3
 	$(BIN)/python -m mediated_transfer.bench
+
+# --- experiments: sweeps, reports, tracking (README: "Reproducing Tables II-IV") ------------
+SCALE       ?= paper
+EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
+ARGS        ?=
+MLFLOW_PORT ?= 5000
+MLFLOW_DB   ?= mlflow.db
+.PHONY: reproduce-tables reports mlflow-ui
+
+reproduce-tables: $(STAMP) ## Run the Tables II-IV sweeps at SCALE=paper|quick|smoke (resumable), then build reports/
+	@for experiment in $(EXPERIMENTS); do \
+		$(BIN)/python -m mediated_transfer experiment=$$experiment scale=$(SCALE) $(ARGS) || exit 1; \
+	done
+	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
+
+reports: $(STAMP) ## Build reports/ (tables, figures, MLflow summaries) from the finished runs at SCALE
+	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
+
+mlflow-ui: $(STAMP) ## Browse the runs in MLflow's UI, served on 127.0.0.1 only (MLFLOW_PORT=5000)
+	$(BIN)/mlflow ui --backend-store-uri sqlite:///$(MLFLOW_DB) --host 127.0.0.1 --port $(MLFLOW_PORT)

@@ -1,6 +1,13 @@
-"""The paper's 2D world: an agent, a disc-shaped target and an L-shaped tool (the mediator)."""
+"""The paper's 2D world: an agent, a disc-shaped target and an L-shaped tool (the mediator).
+
+Importing this package registers the Gymnasium id ``ENV_ID``:
+``gymnasium.make("mediated_transfer/MediatedInteraction-v0", scenario="source")``.
+"""
+
+import gymnasium
 
 from .config import WorldConfig
+from .mediated_env import ACTION_NAMES, NUM_ACTIONS, MediatedInteractionEnv
 from .task import (
     M1,
     M2,
@@ -18,8 +25,17 @@ from .task import (
     tool_picking_locations,
 )
 
+ENV_ID = "mediated_transfer/MediatedInteraction-v0"
+
+# The entry point is a string, so making the environment imports nothing more than this did;
+# the guard keeps a re-import from re-registering (Gymnasium would warn).
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(
+        id=ENV_ID, entry_point="mediated_transfer.env.mediated_env:MediatedInteractionEnv"
+    )
+
 __all__ = [
-    "M1", "M2", "M3", "T", "O", "NUM_DISTANCES", "OBSERVATION_SIZE", "PICKING_LOCATIONS",
-    "SCENARIOS", "Task", "WorldConfig", "sample_task", "sample_tasks", "sensor_vector",
-    "tool_picking_locations",
+    "ACTION_NAMES", "ENV_ID", "M1", "M2", "M3", "T", "O", "NUM_ACTIONS", "NUM_DISTANCES",
+    "OBSERVATION_SIZE", "PICKING_LOCATIONS", "SCENARIOS", "MediatedInteractionEnv", "Task",
+    "WorldConfig", "sample_task", "sample_tasks", "sensor_vector", "tool_picking_locations",
 ]

@@ -52,7 +52,16 @@ class WorldConfig:
     damping: float = 0.05
     """Fraction of linear and angular velocity kept after one simulated second (no friction)."""
     target_mass: float = 1.0
+    """Mass of the target disc (only matters when the tool pushes it)."""
     tool_mass: float = 1.0
+    """Mass of the tool, spread over its two arms by length (only matters when pushed)."""
+    wall_segments: int = 64
+    """Straight static segments approximating the circular wall."""
+    wall_thickness: float = 2.0
+    """Thickness of the wall; its inner face lies at world_radius (thick so nothing tunnels)."""
+    rest_speed: float = 1e-3
+    """A free object slower than this (units/s, rad/s) is set to rest, as Chipmunk's sleeping
+    would; while everything rests, steps that drive nothing skip the physics."""
 
     def __post_init__(self) -> None:
         positive = [f.name for f in fields(self) if f.name not in ("action_noise", "damping")]
@@ -61,6 +70,8 @@ class WorldConfig:
                 raise ValueError(f"env.{name} must be > 0, got {getattr(self, name)!r}")
         if not 0.0 <= self.action_noise <= 1.0:
             raise ValueError(f"env.action_noise must lie in [0, 1], got {self.action_noise!r}")
+        if not self.wall_segments >= 3:
+            raise ValueError(f"env.wall_segments must be >= 3, got {self.wall_segments!r}")
         if not 0.0 < self.damping <= 1.0:
             raise ValueError(f"env.damping must lie in (0, 1], got {self.damping!r}")
         if not self.goal_radius < self.interaction_radius:

@@ -50,10 +50,21 @@ def sensor_vector(
     return obs
 
 
+# Plain floats below: every reset samples and validates a task, and numpy's per-call cost on
+# 2-vectors made that slower than a hundred environment steps.
+def _tool_points(tool_position, tool_angle: float, config: WorldConfig):
+    """M1, M2, M3 as (x, y) tuples (see tool_picking_locations)."""
+    cx, cy = tool_position
+    c, s = math.cos(tool_angle), math.sin(tool_angle)
+    lh, lk = config.tool_handle_length, config.tool_hook_length
+    return (cx + lh * c, cy + lh * s), (cx, cy), (cx - lk * s, cy + lk * c)
+
+
 def _segment_distance(p, a, b) -> float:
-    ab = b - a
-    t = float(np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0.0, 1.0))
-    return float(np.linalg.norm(p - (a + t * ab)))
+    abx, aby = b[0] - a[0], b[1] - a[1]
+    apx, apy = p[0] - a[0], p[1] - a[1]
+    t = min(1.0, max(0.0, (apx * abx + apy * aby) / (abx * abx + aby * aby)))
+    return math.hypot(apx - t * abx, apy - t * aby)
 
 
 @dataclass(frozen=True)
@@ -93,21 +104,20 @@ class Task:
     def problems(self, config: WorldConfig = WorldConfig()) -> list[str]:
         """Why this task cannot start an episode (empty when it can)."""
         out = []
-        values = self.coordinates
-        if not np.all(np.isfinite(values)):
-            out.append(f"task coordinates must be finite, got {values.tolist()}")
+        if not all(math.isfinite(v) for v in (*self.target_position, *self.tool_position,
+                                              self.tool_angle)):
+            out.append(f"task coordinates must be finite, got {self.coordinates.tolist()}")
             return out
-        locs = self.picking_locations(config)
-        target = locs[T]
+        m1, m2, m3 = _tool_points(self.tool_position, self.tool_angle, config)
+        target = self.target_position
         limit = config.world_radius - config.target_radius
-        if np.linalg.norm(target) > limit:
+        if math.hypot(*target) > limit:
             out.append(f"target centre lies outside the world (|T| > {limit:g})")
         tool_limit = config.world_radius - config.tool_width / 2
-        if np.any(np.linalg.norm(locs[:3], axis=1) > tool_limit):
+        if any(math.hypot(*p) > tool_limit for p in (m1, m2, m3)):
             out.append(f"tool lies outside the world (a picking location beyond {tool_limit:g})")
         clearance = config.target_radius + config.tool_width / 2
-        gap = min(_segment_distance(target, locs[M2], locs[M1]),
-                  _segment_distance(target, locs[M2], locs[M3]))
+        gap = min(_segment_distance(target, m2, m1), _segment_distance(target, m2, m3))
         if gap < clearance:
             out.append(f"target and tool overlap (gap {gap:.3f} < {clearance:g})")
         return out
@@ -132,8 +142,8 @@ def _sample_tool_in_range(rng: np.random.Generator, config: WorldConfig):
     while True:
         position = _uniform_in_annulus(rng, 0.0, config.interaction_radius)
         angle = float(rng.uniform(-math.pi, math.pi))
-        locs = tool_picking_locations(position, angle, config)
-        if np.all(np.hypot(locs[:, 0], locs[:, 1]) <= config.interaction_radius):
+        points = _tool_points(position, angle, config)
+        if all(math.hypot(*p) <= config.interaction_radius for p in points):
             return position, angle
 
 

@@ -1,0 +1,44 @@
+"""`make bench`: speed ratios of the environment and the learners, each measured in one run.
+
+Ratios, not absolute times, are the targets (they survive a slower or busier machine):
+  env:    environment step / the bare pymunk space.step calls it makes   (aim <= 2)
+  linear: linear learner time per step / environment step                (aim <= 1)
+  dqn:    our DQN learning steps/s / Stable-Baselines3 DQN steps/s       (aim >= 5)
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+
+PARTS = {
+    "env": "mediated_transfer.bench.env_speed",
+    "linear": "mediated_transfer.bench.learner_speed",
+    "dqn": "mediated_transfer.bench.dqn_speed",
+}
+DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m mediated_transfer.bench", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("parts", nargs="*", default=list(PARTS), choices=list(PARTS),
+                        help="which benchmarks to run (default: all)")
+    parser.add_argument("--steps", type=int, default=None, help="steps per measurement")
+    parser.add_argument("--json", default=None, help="also write the results to this JSON file")
+    args = parser.parse_args(argv)
+    results = {}
+    for part in args.parts:
+        print(f"== {part} ==", flush=True)
+        module = importlib.import_module(PARTS[part])
+        results[part] = module.run(args.steps or DEFAULT_STEPS[part])
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(results, fh, indent=2, default=float)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

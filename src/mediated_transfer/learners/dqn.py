@@ -1,0 +1,606 @@
+"""The paper's deep Q-learner (Sec. IV; Mnih et al. 2015): network, replay buffer, update, learner.
+
+The network (Fig. 2) sees the sensor vector of eq. (2) in two parts: the 6 distances pass
+through 3 fully connected ReLU layers of 256 units; the 5-dim one-hot of the active picking
+location, already a compact feature, is concatenated to the last hidden layer; a linear layer
+maps that to the 11 action values. A target network, copied every tau learning steps, gives the
+bootstrap values; transitions go into a replay buffer of size E and learning starts once it holds
+E_start of them; Adam with a constant learning rate minimises the Huber loss of the TD error;
+epsilon decays linearly from 1 to 0.1.
+
+Speed (660 runs of 500k learning steps on two cores) shapes the implementation, not the maths:
+- all weights of a network live in one flat vector, so the target copy is one vector copy and
+  Adam one fused pass (numba) instead of one per tensor;
+- the update runs forward and backward by hand on preallocated buffers: for a 4-layer MLP,
+  autograd's bookkeeping costs more than the matrix products themselves;
+- acting uses numpy views of the live weights (no copy, always current), which costs a few
+  microseconds where a torch forward of one observation costs tens.
+``QNetwork.forward`` is the plain autograd reference of the same function; the tests check
+that the hand-written gradient and Adam step agree with autograd and ``torch.optim.Adam``.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numba
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
+
+NUM_BINARY = OBSERVATION_SIZE - NUM_DISTANCES
+
+
+# --------------------------------------------------------------------------------------------
+# Config
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class DQNConfig:
+    """Hyperparameters of the deep Q-learner.
+
+    PROVISIONAL defaults: the paper's Table I (its tuned values) is lost. These are common DQN
+    practice (Mnih et al. 2015 scaled to a 500k-step budget; Stable-Baselines3 defaults) until
+    the tuning issue publishes this project's own Table I.
+    """
+
+    learning_rate: float = 1e-4
+    """Adam's constant step size alpha (SB3 default)."""
+    gamma: float = 0.99
+    """Discount factor, in [0, 1)."""
+    batch_size: int = 32
+    """Transitions per gradient update (Mnih et al.)."""
+    buffer_size: int = 100_000
+    """Replay buffer capacity E (transitions; the oldest is overwritten first)."""
+    learning_starts: int = 1_000
+    """E_start: updates begin once the buffer holds this many (and at least batch_size)."""
+    train_frequency: int = 4
+    """One gradient update every this many learning steps (Mnih et al.)."""
+    target_update_interval: int = 1_000
+    """tau: the target network receives a copy of the online weights every tau learning steps."""
+    epsilon_start: float = 1.0
+    """Exploration rate at learning step 0 (paper: 1)."""
+    epsilon_end: float = 0.1
+    """Exploration rate after the decay (paper: 0.1)."""
+    epsilon_decay_steps: int = 50_000
+    """Learning steps over which epsilon falls linearly from start to end (10 % of 500k)."""
+    hidden_size: int = 256
+    """Units per hidden layer (paper: 256)."""
+    num_hidden_layers: int = 3
+    """Fully connected ReLU layers on the 6 distances (paper: 3)."""
+    huber_delta: float = 1.0
+    """The TD error's loss is quadratic inside [-delta, delta] and linear outside."""
+    max_grad_norm: float | None = 10.0
+    """Clip the gradient's global L2 norm to this (SB3 default); None: no clipping."""
+    adam_beta1: float = 0.9
+    """Adam's decay of the gradient mean (torch default)."""
+    adam_beta2: float = 0.999
+    """Adam's decay of the squared-gradient mean (torch default)."""
+    adam_epsilon: float = 1e-8
+    """Adam's denominator guard (torch default)."""
+    torch_threads: int = 1
+    """torch intra-op threads (process-wide); 1 because runs are parallelised across processes."""
+
+    def __post_init__(self) -> None:
+        def fail(key: str, allowed: str) -> None:
+            raise ValueError(f"learner.{key} must be {allowed}, got {getattr(self, key)!r}")
+
+        for key in ("batch_size", "buffer_size", "train_frequency", "target_update_interval",
+                    "hidden_size", "num_hidden_layers", "torch_threads"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                fail(key, "an integer >= 1")
+        for key in ("learning_starts", "epsilon_decay_steps"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                fail(key, "an integer >= 0")
+        if not 0.0 <= self.gamma < 1.0:
+            fail("gamma", "in [0, 1)")
+        if not (self.learning_rate > 0 and math.isfinite(self.learning_rate)):
+            fail("learning_rate", "a finite number > 0")
+        for key in ("epsilon_start", "epsilon_end"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                fail(key, "in [0, 1]")
+        if not self.huber_delta > 0:
+            fail("huber_delta", "> 0")
+        if self.max_grad_norm is not None and not self.max_grad_norm > 0:
+            fail("max_grad_norm", "> 0 or None (no clipping)")
+        for key in ("adam_beta1", "adam_beta2"):
+            if not 0.0 <= getattr(self, key) < 1.0:
+                fail(key, "in [0, 1)")
+        if not self.adam_epsilon > 0:
+            fail("adam_epsilon", "> 0")
+        if self.buffer_size < self.batch_size:
+            raise ValueError(
+                f"learner.buffer_size ({self.buffer_size}) must be >= learner.batch_size "
+                f"({self.batch_size}): the replay buffer must hold at least one batch"
+            )
+        if self.learning_starts > self.buffer_size:
+            raise ValueError(
+                f"learner.learning_starts ({self.learning_starts}) must be <= learner.buffer_size "
+                f"({self.buffer_size}), or learning would never start"
+            )
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+# --------------------------------------------------------------------------------------------
+# Network
+# --------------------------------------------------------------------------------------------
+def layer_shapes(hidden_size: int, num_hidden_layers: int, num_actions: int) -> list[tuple[int, int]]:
+    """(out, in) of each linear layer: the hidden layers on the distances, then the head on
+    [last hidden layer, one-hot picking location]."""
+    shapes = [(hidden_size, NUM_DISTANCES)]
+    shapes += [(hidden_size, hidden_size)] * (num_hidden_layers - 1)
+    shapes.append((num_actions, hidden_size + NUM_BINARY))
+    return shapes
+
+
+def forward_flops(hidden_size: int, num_hidden_layers: int, num_actions: int) -> int:
+    """Floating-point operations (2 per multiply-add) of one observation's forward pass."""
+    return sum(2 * out * inp for out, inp in layer_shapes(hidden_size, num_hidden_layers, num_actions))
+
+
+class QNetwork(nn.Module):
+    """Fig. 2: distances -> hidden ReLU layers; one-hot concatenated to the last; linear -> Q.
+
+    All weights and biases are slices of one flat parameter vector (layer by layer: weight
+    (out, in), then bias), which makes copying, checkpointing and the Adam step one vector
+    operation each. Initialisation is torch's ``nn.Linear`` default, U(-1/sqrt(in), 1/sqrt(in)),
+    drawn from the given generator.
+    """
+
+    def __init__(self, hidden_size: int = 256, num_hidden_layers: int = 3, num_actions: int = 11,
+                 generator: torch.Generator | None = None):
+        super().__init__()
+        self.shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions)
+        self.flat = nn.Parameter(torch.empty(sum(o * i + o for o, i in self.shapes)))
+        with torch.no_grad():
+            for (out, inp), (w, b) in zip(self.shapes, self.layers()):
+                bound = 1.0 / math.sqrt(inp)
+                for t in (w, b):
+                    t.copy_(torch.rand(t.shape, generator=generator) * (2 * bound) - bound)
+
+    def layers(self, flat: torch.Tensor | None = None) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """(weight, bias) views of each layer into ``flat`` (default: this network's)."""
+        flat = self.flat if flat is None else flat
+        views, start = [], 0
+        for out, inp in self.shapes:
+            w = flat[start:start + out * inp].view(out, inp)
+            start += out * inp
+            views.append((w, flat[start:start + out]))
+            start += out
+        return views
+
+    def forward(self, observation: torch.Tensor) -> torch.Tensor:
+        distances, picking = observation[:, :NUM_DISTANCES], observation[:, NUM_DISTANCES:]
+        *hidden, (head_w, head_b) = self.layers()
+        h = distances
+        for w, b in hidden:
+            h = F.relu(F.linear(h, w, b))
+        return F.linear(torch.cat([h, picking], dim=1), head_w, head_b)
+
+
+# --------------------------------------------------------------------------------------------
+# Replay buffer
+# --------------------------------------------------------------------------------------------
+class ReplayBuffer:
+    """Ring buffer of the last E transitions, one float32 row each, so that sampling a batch is
+    a single gather: [observation (11) | action | reward | next observation (11) | bootstrap],
+    bootstrap being 1 unless the next state is terminal (then the TD target has no bootstrap
+    term)."""
+
+    OBSERVATION = slice(0, OBSERVATION_SIZE)
+    ACTION = OBSERVATION_SIZE
+    REWARD = OBSERVATION_SIZE + 1
+    NEXT_OBSERVATION = slice(OBSERVATION_SIZE + 2, 2 * OBSERVATION_SIZE + 2)
+    BOOTSTRAP = 2 * OBSERVATION_SIZE + 2
+    WIDTH = 2 * OBSERVATION_SIZE + 3
+
+    def __init__(self, capacity: int, batch_size: int):
+        self.capacity, self.size, self.position = capacity, 0, 0
+        self.transitions = np.zeros((capacity, self.WIDTH), np.float32)
+        # One batch, reused by every sample; the torch views share its memory.
+        self._batch = np.zeros((batch_size, self.WIDTH), np.float32)
+        rows = torch.from_numpy(self._batch)
+        self.batch = {
+            "observations": rows[:, self.OBSERVATION],
+            "actions": rows[:, self.ACTION],  # float32 (exact for action indices)
+            "rewards": rows[:, self.REWARD],
+            "next_observations": rows[:, self.NEXT_OBSERVATION],
+            "bootstrap": rows[:, self.BOOTSTRAP],
+        }
+
+    def add(self, observation, action: int, reward: float, next_observation, terminated: bool) -> None:
+        row = self.transitions[self.position]
+        row[self.OBSERVATION] = observation
+        row[self.ACTION] = action
+        row[self.REWARD] = reward
+        row[self.NEXT_OBSERVATION] = next_observation
+        row[self.BOOTSTRAP] = 0.0 if terminated else 1.0
+        self.position = (self.position + 1) % self.capacity
+        self.size = min(self.size + 1, self.capacity)
+
+    def sample(self, rng: np.random.Generator) -> dict[str, torch.Tensor]:
+        """A uniform batch (with replacement), written into the shared batch tensors."""
+        index = rng.integers(0, self.size, len(self._batch))
+        np.take(self.transitions, index, axis=0, out=self._batch)
+        return self.batch
+
+
+# --------------------------------------------------------------------------------------------
+# Update: TD error, hand-written backward pass, Adam
+# --------------------------------------------------------------------------------------------
+@numba.njit(fastmath=True, error_model="numpy", cache=True)
+def _adam_step(params, grad, mean, sq_mean, step_size, beta1, beta2, eps, bias2, max_norm):
+    """One Adam step (torch.optim.Adam's formula) on flat vectors, after clipping ``grad`` to
+    global L2 norm ``max_norm`` (<= 0: no clipping). ``step_size`` = lr / (1 - beta1^t),
+    ``bias2`` = 1 / (1 - beta2^t). Returns the gradient norm before clipping."""
+    total = np.float32(0.0)
+    for i in range(grad.size):
+        total += grad[i] * grad[i]
+    norm = np.sqrt(np.float64(total))
+    scale = np.float32(1.0)
+    if max_norm > 0 and norm > max_norm:
+        scale = np.float32(max_norm / (norm + 1e-6))  # the guard as in torch's clip_grad_norm_
+    one = np.float32(1.0)
+    for i in range(params.size):
+        g = grad[i] * scale
+        m = beta1 * mean[i] + (one - beta1) * g
+        v = beta2 * sq_mean[i] + (one - beta2) * g * g
+        mean[i] = m
+        sq_mean[i] = v
+        params[i] -= step_size * m / (np.sqrt(v * bias2) + eps)
+    return norm
+
+
+@numba.njit(fastmath=True, error_model="numpy", cache=True)
+def _huber_td_gradient(q, target_q, actions, rewards, bootstrap, gamma, huber_delta, delta_q, head_bias_grad):
+    """dLoss/dQ of the mean Huber loss of the TD errors into ``delta_q`` (nonzero only at the
+    taken action), and its column sums (the head's bias gradient); returns the loss.
+    y = r + gamma * bootstrap * max_a' Q_target(s', a'); the Huber loss's derivative is the TD
+    error clipped to [-delta, delta]."""
+    batch, num_actions = q.shape
+    loss = 0.0
+    head_bias_grad[:] = 0.0
+    delta_q[:] = 0.0
+    for i in range(batch):
+        best = target_q[i, 0]
+        for a in range(1, num_actions):
+            best = max(best, target_q[i, a])
+        action = int(actions[i])
+        td = q[i, action] - (rewards[i] + gamma * bootstrap[i] * best)
+        if abs(td) <= huber_delta:
+            loss += 0.5 * td * td
+        else:
+            loss += huber_delta * (abs(td) - 0.5 * huber_delta)
+        grad = min(max(td, -huber_delta), huber_delta) / batch
+        delta_q[i, action] = grad
+        head_bias_grad[action] += grad
+    return loss / batch
+
+
+@numba.njit(fastmath=True, error_model="numpy", cache=True)
+def _relu_backward(delta, activation, bias_grad):
+    """Pass ``delta`` back through a ReLU (zero where the unit was inactive, in place) and sum it
+    over the batch into the layer's bias gradient."""
+    batch, width = delta.shape
+    bias_grad[:] = 0.0
+    for i in range(batch):
+        for j in range(width):
+            if activation[i, j] <= 0.0:
+                delta[i, j] = 0.0
+            bias_grad[j] += delta[i, j]
+
+
+class TDUpdate:
+    """One gradient step of deep Q-learning on a replay batch, on preallocated buffers.
+
+    Loss: mean over the batch of Huber(Q(s, a) - y), y = r + gamma * max_a' Q_target(s', a')
+    (no bootstrap after a terminal state). The backward pass is written out layer by layer
+    (dL/dW = delta^T h, dL/dh = delta W, ReLU passes delta where its unit was active).
+    """
+
+    def __init__(self, network: QNetwork, target: QNetwork, config: DQNConfig):
+        self.config = config
+        self.online = network.layers(network.flat.detach())
+        self.target = target.layers(target.flat.detach())
+        self.grad_flat = torch.zeros_like(network.flat.detach())
+        self.grads = network.layers(self.grad_flat)
+        self.adam_mean = torch.zeros_like(self.grad_flat)
+        self.adam_sq_mean = torch.zeros_like(self.grad_flat)
+        self.adam_steps = 0
+        self._params_np = network.flat.detach().numpy()
+        self._adam_np = (self.grad_flat.numpy(), self.adam_mean.numpy(), self.adam_sq_mean.numpy())
+        B, H, A = config.batch_size, config.hidden_size, network.shapes[-1][0]
+        # Activations of each hidden layer; the last one is written straight into its slot of
+        # the head's input [h, one-hot], so the concatenation costs nothing.
+        def activations():
+            acts = [torch.zeros(B, H) for _ in range(config.num_hidden_layers - 1)]
+            head_input = torch.zeros(B, H + NUM_BINARY)
+            return acts + [head_input[:, :H]], head_input
+        self.acts, self.head_input = activations()
+        self.target_acts, self.target_head_input = activations()
+        self.q = torch.zeros(B, A)
+        self.target_q = torch.zeros(B, A)
+        self.delta_q = torch.zeros(B, A)
+        self.deltas = [torch.zeros(B, H) for _ in range(config.num_hidden_layers)]
+        self.grad_norm = 0.0
+        # numpy views of the same memory, for the numba kernels.
+        self._np = {
+            "q": self.q.numpy(), "target_q": self.target_q.numpy(), "delta_q": self.delta_q.numpy(),
+            "acts": [a.numpy() for a in self.acts], "deltas": [d.numpy() for d in self.deltas],
+            "head_gb": self.grads[-1][1].numpy(),
+            "hidden_gb": [gb.numpy() for _, gb in self.grads[:-1]],
+        }
+
+    def _forward(self, layers, observations, acts, head_input, q) -> None:
+        *hidden, (head_w, head_b) = layers
+        h = observations[:, :NUM_DISTANCES]
+        for (w, b), out in zip(hidden, acts):
+            torch.addmm(b, h, w.t(), out=out).relu_()
+            h = out
+        head_input[:, h.shape[1]:].copy_(observations[:, NUM_DISTANCES:])
+        torch.addmm(head_b, head_input, head_w.t(), out=q)
+
+    def __call__(self, batch: dict[str, torch.Tensor]) -> float:
+        """One update; returns the gradient's norm before clipping."""
+        # Adam's moments of rarely-active weights decay into subnormal floats, which cost the
+        # CPU ~10x per operation; flush them to zero during the update (this thread only, and
+        # restored after, so nothing else in the process sees the switch).
+        torch.set_flush_denormal(True)
+        try:
+            return self._update(batch)
+        finally:
+            torch.set_flush_denormal(False)
+
+    def _update(self, batch: dict[str, torch.Tensor]) -> float:
+        cfg = self.config
+        obs = batch["observations"]
+
+        # TD target from the target network (no gradient flows through it), then the online
+        # forward pass and dLoss/dQ.
+        self._forward(self.target, batch["next_observations"], self.target_acts,
+                      self.target_head_input, self.target_q)
+        self._forward(self.online, obs, self.acts, self.head_input, self.q)
+        *hidden_w, (head_w, _) = self.online
+        *hidden_g, (head_gw, head_gb) = self.grads
+        loss = _huber_td_gradient(
+            self._np["q"], self._np["target_q"], batch["actions"].numpy(), batch["rewards"].numpy(),
+            batch["bootstrap"].numpy(), cfg.gamma, cfg.huber_delta, self._np["delta_q"], self._np["head_gb"])
+
+        # Backward through the head, then each hidden layer (last to first).
+        torch.mm(self.delta_q.t(), self.head_input, out=head_gw)
+        delta = torch.mm(self.delta_q, head_w[:, :cfg.hidden_size], out=self.deltas[-1])
+        inputs = [obs[:, :NUM_DISTANCES]] + self.acts[:-1]
+        for layer in reversed(range(len(hidden_w))):
+            _relu_backward(self._np["deltas"][layer], self._np["acts"][layer], self._np["hidden_gb"][layer])
+            torch.mm(delta.t(), inputs[layer], out=hidden_g[layer][0])
+            if layer > 0:  # the distances need no gradient
+                delta = torch.mm(delta, hidden_w[layer][0], out=self.deltas[layer - 1])
+
+        self.adam_steps += 1
+        t = self.adam_steps
+        self.grad_norm = _adam_step(
+            self._params_np, *self._adam_np,
+            np.float32(cfg.learning_rate / (1.0 - cfg.adam_beta1 ** t)),
+            np.float32(cfg.adam_beta1), np.float32(cfg.adam_beta2), np.float32(cfg.adam_epsilon),
+            np.float32(1.0 / (1.0 - cfg.adam_beta2 ** t)),
+            0.0 if cfg.max_grad_norm is None else float(cfg.max_grad_norm),
+        )
+        return loss
+
+    def flops(self) -> int:
+        """FLOPs of one update: the online forward, its backward (~2x), the target forward."""
+        cfg = self.config
+        return 4 * cfg.batch_size * forward_flops(cfg.hidden_size, cfg.num_hidden_layers,
+                                                  self.q.shape[1])
+
+
+# --------------------------------------------------------------------------------------------
+# Acting: the greedy action from numpy views of the live online weights
+# --------------------------------------------------------------------------------------------
+@numba.njit(fastmath=True, error_model="numpy", cache=True)
+def _q_values(flat, shapes, observation, hidden, q):
+    """Q(s, .) of one observation into ``q``, reading the flat weight vector laid out as in
+    ``QNetwork`` (``shapes``: (out, in) per layer); ``hidden``: (2, hidden_size) scratch.
+    Returns argmax_a Q(s, a) (the first on ties)."""
+    num_hidden = shapes.shape[0] - 1
+    src, dst = hidden[0], hidden[1]
+    for i in range(shapes[0, 1]):
+        src[i] = observation[i]  # the distances
+    start = 0
+    for layer in range(num_hidden):
+        rows, cols = shapes[layer, 0], shapes[layer, 1]
+        w = flat[start:start + rows * cols].reshape((rows, cols))
+        b = flat[start + rows * cols:start + rows * cols + rows]
+        start += rows * cols + rows
+        for r in range(rows):
+            acc = b[r]
+            for c in range(cols):
+                acc += w[r, c] * src[c]
+            dst[r] = max(acc, 0.0)
+        src, dst = dst, src
+    rows, cols = shapes[num_hidden, 0], shapes[num_hidden, 1]
+    width = shapes[num_hidden - 1, 0]
+    w = flat[start:start + rows * cols].reshape((rows, cols))
+    b = flat[start + rows * cols:start + rows * cols + rows]
+    best = 0
+    for r in range(rows):
+        acc = b[r]
+        for c in range(width):
+            acc += w[r, c] * src[c]
+        for c in range(width, cols):  # the one-hot of the active picking location
+            acc += w[r, c] * observation[shapes[0, 1] + c - width]
+        q[r] = acc
+        if acc > q[best]:
+            best = r
+    return best
+
+
+class GreedyPolicy:
+    """argmax_a Q(s, a) for one observation. Reads the online weights through a numpy view of
+    the torch storage, so it always sees the latest update without copying; a compiled loop,
+    because a torch (or numpy) forward of a single observation is mostly call overhead."""
+
+    def __init__(self, network: QNetwork):
+        self.flat = network.flat.detach().numpy()
+        self.shapes = np.array(network.shapes, dtype=np.int64)
+        self.hidden = np.zeros((2, network.shapes[0][0]), np.float32)
+        self.q = np.zeros(network.shapes[-1][0], np.float32)
+
+    def q_values(self, observation: np.ndarray) -> np.ndarray:
+        _q_values(self.flat, self.shapes, observation, self.hidden, self.q)
+        return self.q
+
+    def __call__(self, observation: np.ndarray) -> int:
+        return _q_values(self.flat, self.shapes, observation, self.hidden, self.q)
+
+
+# --------------------------------------------------------------------------------------------
+# Learner
+# --------------------------------------------------------------------------------------------
+def _rng_state_to_tensor(rng: np.random.Generator) -> torch.Tensor:
+    """PCG64 state (two 128-bit integers and a cached 32-bit half) as an int64 tensor of 32-bit
+    words, so that a checkpoint holds tensors only."""
+    s = rng.bit_generator.state
+    words = [(s["state"][k] >> (32 * j)) & 0xFFFFFFFF for k in ("state", "inc") for j in range(4)]
+    return torch.tensor(words + [s["has_uint32"], s["uinteger"]], dtype=torch.int64)
+
+
+def _rng_state_from_tensor(rng: np.random.Generator, tensor: torch.Tensor) -> None:
+    words = [int(w) for w in tensor.tolist()]
+    number = lambda ws: sum(w << (32 * j) for j, w in enumerate(ws))  # noqa: E731
+    rng.bit_generator.state = {
+        "bit_generator": "PCG64",
+        "state": {"state": number(words[0:4]), "inc": number(words[4:8])},
+        "has_uint32": words[8], "uinteger": words[9],
+    }
+
+
+class DQNLearner:
+    """Deep Q-learning with the paper's network, behind the ``Learner`` interface.
+
+    A learning step is one ``observe`` call: the transition enters the replay buffer; once the
+    buffer holds E_start transitions, every ``train_frequency``-th step does one gradient update;
+    every tau-th step copies the online weights to the target network. Exploration is
+    epsilon-greedy with epsilon linear in the learning step. All randomness after construction
+    (exploration, batch sampling) comes from one numpy generator seeded with ``seed``; the
+    initial weights come from a torch generator seeded with ``seed``.
+    """
+
+    def __init__(self, config: DQNConfig | None = None, num_actions: int = 11, seed: int = 0):
+        self.config = config = config if config is not None else DQNConfig()
+        if isinstance(num_actions, bool) or not isinstance(num_actions, int) or num_actions < 1:
+            raise ValueError(f"num_actions must be an integer >= 1, got {num_actions!r}")
+        self.num_actions = num_actions
+        torch.set_num_threads(config.torch_threads)
+        self.rng = np.random.default_rng(seed)
+        init = torch.Generator().manual_seed(seed)
+        self.network = QNetwork(config.hidden_size, config.num_hidden_layers, num_actions, init)
+        self.target_network = copy.deepcopy(self.network)
+        self.buffer = ReplayBuffer(config.buffer_size, config.batch_size)
+        self.update = TDUpdate(self.network, self.target_network, config)
+        self.greedy = GreedyPolicy(self.network)
+        self._updates_start = max(config.learning_starts, config.batch_size)
+        self.steps = self.target_syncs = self.episodes = 0
+        self.last_loss = 0.0
+
+    # --- exploration schedule -----------------------------------------------------------------
+    @property
+    def epsilon(self) -> float:
+        cfg = self.config
+        if cfg.epsilon_decay_steps == 0:
+            return cfg.epsilon_end
+        fraction = min(1.0, self.steps / cfg.epsilon_decay_steps)
+        return cfg.epsilon_start + fraction * (cfg.epsilon_end - cfg.epsilon_start)
+
+    # --- Learner interface ----------------------------------------------------------------------
+    def act(self, observation: np.ndarray, explore: bool = True) -> int:
+        if explore and self.rng.random() < self.epsilon:
+            return int(self.rng.integers(self.num_actions))
+        return self.greedy(observation)
+
+    def observe(self, observation, action: int, reward: float, next_observation, terminated: bool) -> None:
+        cfg = self.config
+        self.buffer.add(observation, action, reward, next_observation, terminated)
+        self.steps += 1
+        if self.buffer.size >= self._updates_start and self.steps % cfg.train_frequency == 0:
+            self.last_loss = self.update(self.buffer.sample(self.rng))
+        if self.steps % cfg.target_update_interval == 0:
+            self._sync_target()
+
+    def end_episode(self) -> None:
+        self.episodes += 1  # nothing else: DQN keeps no per-episode state
+
+    def _sync_target(self) -> None:
+        with torch.no_grad():
+            self.target_network.flat.copy_(self.network.flat)
+        self.target_syncs += 1
+
+    def q_values(self, observation: np.ndarray) -> np.ndarray:
+        """Q(s, .) of the online network (a copy)."""
+        return self.greedy.q_values(observation).copy()
+
+    @property
+    def stats(self) -> dict[str, float]:
+        return {
+            "learning_steps": float(self.steps),
+            "updates": float(self.update.adam_steps),
+            "target_syncs": float(self.target_syncs),
+            "episodes": float(self.episodes),
+            "epsilon": float(self.epsilon),
+            "replay_size": float(self.buffer.size),
+            "last_loss": float(self.last_loss),
+            "last_grad_norm": float(self.update.grad_norm),
+        }
+
+    # --- checkpoints ----------------------------------------------------------------------------
+    def state_dict(self) -> dict[str, Any]:
+        """Tensors and ints only (loads with ``torch.load(..., weights_only=True)``)."""
+        b = self.buffer
+        state = {
+            "network": self.network.flat.detach().clone(),
+            "target_network": self.target_network.flat.detach().clone(),
+            "adam_mean": self.update.adam_mean.clone(),
+            "adam_sq_mean": self.update.adam_sq_mean.clone(),
+            "adam_steps": self.update.adam_steps,
+            "rng": _rng_state_to_tensor(self.rng),
+            "steps": self.steps, "last_loss": self.last_loss, "grad_norm": self.update.grad_norm,
+            "target_syncs": self.target_syncs, "episodes": self.episodes,
+            "buffer_size": b.size, "buffer_position": b.position,
+        }
+        state["buffer_transitions"] = torch.from_numpy(b.transitions[: b.size].copy())
+        return state
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        expected = self.network.flat.shape
+        for key in ("network", "target_network", "adam_mean", "adam_sq_mean"):
+            if tuple(state[key].shape) != tuple(expected):
+                raise ValueError(
+                    f"checkpoint {key!r} has shape {tuple(state[key].shape)}, this learner's "
+                    f"network needs {tuple(expected)} (check hidden_size / num_hidden_layers)"
+                )
+        size = int(state["buffer_size"])
+        if size > self.buffer.capacity:
+            raise ValueError(f"checkpoint replay buffer holds {size} transitions, "
+                             f"learner.buffer_size is {self.buffer.capacity}")
+        # In-place copies: the numpy views used by acting and Adam stay valid.
+        with torch.no_grad():
+            self.network.flat.copy_(state["network"])
+            self.target_network.flat.copy_(state["target_network"])
+        self.update.adam_mean.copy_(state["adam_mean"])
+        self.update.adam_sq_mean.copy_(state["adam_sq_mean"])
+        self.update.adam_steps = int(state["adam_steps"])
+        _rng_state_from_tensor(self.rng, state["rng"])
+        self.steps = int(state["steps"])
+        self.last_loss, self.update.grad_norm = float(state["last_loss"]), float(state["grad_norm"])
+        self.target_syncs, self.episodes = int(state["target_syncs"]), int(state["episodes"])
+        self.buffer.transitions[:size] = state["buffer_transitions"].numpy()
+        self.buffer.size, self.buffer.position = size, int(state["buffer_position"])

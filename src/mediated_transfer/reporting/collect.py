@@ -1,0 +1,70 @@
+"""Read the finished runs of a sweep, grouped by table cell: the input of every table and figure.
+
+A table sweep leaves ``<sweep_dir>/<cell>/seed=<k>/result.json`` per finished run (conf/config.yaml:
+hydra.sweep.subdir). Runs of variants (extra swept keys) sit one folder deeper and are not part
+of the table. Unfinished runs have no result.json and are simply not there yet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..metrics import MetricsConfig, summarise_runs
+from ..results import RESULT_FILE, RunResult
+
+
+@dataclass
+class CellRuns:
+    """The finished runs of one table cell (strategy and N_source)."""
+
+    strategy: str
+    n_source: int
+    results: list[RunResult] = field(default_factory=list)
+
+    @property
+    def cell(self) -> str:
+        return f"{self.strategy}_{self.n_source}"
+
+    @property
+    def seeds(self) -> list[int]:
+        return sorted(r.seed for r in self.results)
+
+    def summary(self, config: MetricsConfig) -> dict:
+        """metrics.summarise_runs of the cell's curves (mean and SEM curves, L_R, time to threshold)."""
+        steps = self.results[0].steps
+        return summarise_runs(np.array([r.mean_reward for r in self.results]), steps, config)
+
+
+def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
+                  representation: str | None = None, budget: int | None = None) -> dict[str, CellRuns]:
+    """The finished runs under ``sweep_dir`` by cell name, runs sorted by seed.
+
+    With ``algorithm``/``representation``/``budget`` given, a run of another learner or budget
+    in the folder is an error (it would silently mix into the table otherwise); so is a run
+    whose curve has other evaluation steps than the rest of its cell.
+    """
+    sweep_dir = Path(sweep_dir)
+    cells: dict[str, CellRuns] = {}
+    for path in sorted(sweep_dir.glob(f"*/seed=*/{RESULT_FILE}")):
+        result = RunResult.read(path.parent)
+        folder = path.parent
+        expected = {"algorithm": algorithm, "representation": representation, "budget": budget}
+        for key, wanted in expected.items():
+            if wanted is not None and getattr(result, key) != wanted:
+                raise ValueError(f"{folder}: {key}={getattr(result, key)!r}, but this table expects "
+                                 f"{key}={wanted!r}; the folder belongs to another sweep")
+        cell_name = f"{result.strategy}_{result.n_source}"
+        if folder.parent.name != cell_name or folder.name != f"seed={result.seed}":
+            raise ValueError(f"{folder} holds the run {cell_name} seed={result.seed}: "
+                             "the folder does not match its content")
+        cell = cells.setdefault(cell_name, CellRuns(result.strategy, result.n_source))
+        if cell.results and cell.results[0].steps != result.steps:
+            raise ValueError(f"{folder}: evaluation steps differ from the other runs of {cell_name} "
+                             f"({result.steps[:3]}... vs {cell.results[0].steps[:3]}...)")
+        cell.results.append(result)
+    for cell in cells.values():
+        cell.results.sort(key=lambda r: r.seed)
+    return cells

@@ -1,0 +1,226 @@
+"""One learning run of one configuration: source tasks first, then the target task, evaluated.
+
+This is the experiment of section V: a learner is seeded by solving the source tasks C that a
+transfer strategy hands out (those episodes are learning steps too), then learns the target
+task until the budget is spent. At evenly spaced points the greedy policy is evaluated on a
+fixed set of target tasks; from that curve come the reward loss L_R and the time to threshold.
+
+The loop is written per run but keeps the pieces separate (strategy, learner, environment,
+evaluation), so that several seeds of one table cell can later be stepped side by side.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from . import metrics
+from .env import WorldConfig, sample_tasks
+from .env.mediated_env import MediatedInteractionEnv
+from .learners.base import Learner
+from .learners.factory import ALGORITHMS, make_learner, validate_learner_choice
+from .results import RunResult
+from .transfer.source_tasks import sensor_vectors, source_task_set
+from .transfer.strategies import STRATEGIES, make_strategy
+
+# Independent random streams of one run, all derived from its seed.
+_ENV_STREAM, _STRATEGY_STREAM, _EVAL_TASK_STREAM, _EVAL_NOISE_STREAM = 1, 2, 3, 4
+
+
+def _stream_seed(seed: int, stream: int) -> int:
+    return int(np.random.SeedSequence([seed, stream]).generate_state(1)[0])
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything that defines one learning run, as plain values."""
+
+    algorithm: str = "linear_q"
+    """Learner: one of learners.factory.ALGORITHMS."""
+    representation: str = "rbf"
+    """Its representation: rbf or fsr for linear_q, network for dqn."""
+    strategy: str = "none"
+    """Transfer strategy: none, regular (Algorithm 1) or scaffolded (Algorithm 2)."""
+    n_source: int = 0
+    """N_source: size of the clustered source task set C (0: no source phase)."""
+    seed: int = 0
+    budget: int = 500_000
+    """Learning steps of the whole run, source and target episodes together."""
+    eval_points: int = 25
+    """Evaluation points, evenly spaced: after budget/eval_points, 2*budget/eval_points, ... steps."""
+    eval_episodes: int = 100
+    """Target-task episodes per evaluation point (greedy policy, action noise on)."""
+    threshold: float = 8.0
+    """<R> of an 80 % success rate (reward 10)."""
+    source_pool_size: int = 10_000
+    """Random source tasks clustered into C."""
+    source_set_seed: int = 0
+    """Seed of that pool: one fixed C per N_source, shared by all runs (as in the paper)."""
+    cache_dir: str | None = None
+    """Where clustered source task sets are cached (None: no cache)."""
+    world: WorldConfig = field(default_factory=WorldConfig)
+    algorithm_params: dict[str, Any] = field(default_factory=dict)
+    representation_params: dict[str, Any] = field(default_factory=dict)
+
+    def validate(self) -> "RunSpec":
+        """Raise a clear error for bad input before any work starts."""
+        validate_learner_choice(
+            self.algorithm, self.representation, self.algorithm_params, self.representation_params
+        )
+        if self.strategy not in STRATEGIES:
+            raise ValueError(f"strategy={self.strategy!r} is unknown; allowed: {', '.join(STRATEGIES)}")
+        if self.n_source < 0:
+            raise ValueError(f"n_source must be >= 0, got {self.n_source}")
+        if self.n_source > self.source_pool_size:
+            raise ValueError(
+                f"n_source={self.n_source} exceeds source_pool_size={self.source_pool_size}: "
+                "cannot cluster a pool into more clusters than it has tasks"
+            )
+        if (self.strategy == "none") != (self.n_source == 0):
+            raise ValueError(
+                f"strategy={self.strategy!r} with n_source={self.n_source}: 'none' needs "
+                "n_source=0, and 'regular'/'scaffolded' need n_source >= 1"
+            )
+        for key in ("budget", "eval_points", "eval_episodes"):
+            if getattr(self, key) < 1:
+                raise ValueError(f"{key} must be >= 1, got {getattr(self, key)}")
+        if self.budget % self.eval_points:
+            raise ValueError(
+                f"budget={self.budget} is not divisible into eval_points={self.eval_points} "
+                "evenly spaced evaluation points"
+            )
+        return self
+
+    def describe(self) -> str:
+        return (f"{self.algorithm}/{self.representation} {self.strategy} "
+                f"N_source={self.n_source} seed={self.seed}")
+
+
+def evaluate(learner: Learner, env: MediatedInteractionEnv, tasks, seed: int) -> tuple[float, float]:
+    """<R> and success rate of the greedy policy on ``tasks``; the learner is left unchanged."""
+    total, successes = 0.0, 0
+    for i, task in enumerate(tasks):
+        # Re-seeding at every evaluation point gives every point the same noise stream start.
+        obs, _ = env.reset(seed=seed if i == 0 else None, options={"task": task})
+        while True:
+            obs, reward, terminated, truncated, _ = env.step(learner.act(obs, explore=False))
+            total += reward
+            if terminated or truncated:
+                successes += bool(terminated)
+                break
+    return total / len(tasks), successes / len(tasks)
+
+
+ProgressFn = Callable[[int, int], None]
+
+
+def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_every: int = 0) -> RunResult:
+    """Run one learning run and return its result (the caller writes it)."""
+    spec.validate()
+    world = spec.world
+    learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
+                           spec.representation_params, world=world, seed=spec.seed)
+    source_tasks = source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
+                                   seed=spec.source_set_seed, cache_dir=spec.cache_dir)
+    strategy = make_strategy(spec.strategy, source_tasks, sensor_vectors(source_tasks, world),
+                             np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)))
+    # The same evaluation tasks for every strategy and N_source of a seed: shared randomness.
+    eval_tasks = sample_tasks("target", spec.eval_episodes,
+                              np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)), world)
+    eval_seed = _stream_seed(spec.seed, _EVAL_NOISE_STREAM)
+    env = MediatedInteractionEnv("target", world)
+    eval_env = MediatedInteractionEnv("target", world)
+    eval_every = spec.budget // spec.eval_points
+    progress_every = progress_every or eval_every
+
+    steps: list[int] = []
+    rewards: list[float] = []
+    success: list[float] = []
+    source_phase_end: int | None = None
+    step = 0
+    env_seed: int | None = _stream_seed(spec.seed, _ENV_STREAM)
+    learn_time = 0.0
+    started = time.perf_counter()
+    mark = started
+    while step < spec.budget:
+        task = strategy.next_task()
+        # Without a task the env samples a target task from its own seeded generator.
+        obs, _ = env.reset(seed=env_seed, options=None if task is None else {"task": task})
+        env_seed = None
+        terminated = False
+        while True:
+            action = learner.act(obs, explore=True)
+            next_obs, reward, terminated, truncated, _ = env.step(action)
+            learner.observe(obs, action, reward, next_obs, terminated)
+            obs = next_obs
+            step += 1
+            if step % eval_every == 0:
+                learn_time += time.perf_counter() - mark
+                r, p = evaluate(learner, eval_env, eval_tasks, eval_seed)
+                steps.append(step)
+                rewards.append(r)
+                success.append(p)
+                mark = time.perf_counter()
+            if progress is not None and step % progress_every == 0:
+                progress(step, spec.budget)
+            if terminated or truncated or step >= spec.budget:
+                break
+        learner.end_episode()
+        if task is not None:
+            strategy.report(solved=bool(terminated))
+            if not strategy.in_source_phase:
+                source_phase_end = step
+    learn_time += time.perf_counter() - mark
+    wall = time.perf_counter() - started
+
+    rewards_arr = np.asarray(rewards)
+    return RunResult(
+        algorithm=spec.algorithm,
+        representation=spec.representation,
+        strategy=spec.strategy,
+        n_source=spec.n_source,
+        seed=spec.seed,
+        budget=spec.budget,
+        steps=steps,
+        mean_reward=rewards,
+        success_rate=success,
+        reward_loss=metrics.reward_loss(rewards_arr, world.success_reward),
+        time_to_threshold=metrics.time_to_threshold(steps, rewards_arr, spec.threshold),
+        source_phase_end=source_phase_end,
+        source_tasks_solved=strategy.solved_count,
+        wall_time_s=wall,
+        learning_steps_per_s=spec.budget / learn_time if learn_time > 0 else math.inf,
+        learner_stats=dict(learner.stats),
+    )
+
+
+def spec_from_dict(values: dict[str, Any]) -> RunSpec:
+    """A RunSpec from plain values (e.g. a resolved Hydra config); unknown keys are errors."""
+    allowed = {f.name for f in fields(RunSpec)}
+    unknown = sorted(set(values) - allowed)
+    if unknown:
+        raise ValueError(f"unknown run keys {unknown}; allowed: {', '.join(sorted(allowed))}")
+    values = dict(values)
+    world = values.pop("world", None)
+    spec = RunSpec(**values)
+    if world is not None:
+        world = world if isinstance(world, WorldConfig) else _world_from_dict(world)
+        spec = replace(spec, world=world)
+    return spec
+
+
+def _world_from_dict(values: dict[str, Any]) -> WorldConfig:
+    allowed = {f.name for f in fields(WorldConfig)}
+    unknown = sorted(set(values) - allowed)
+    if unknown:
+        raise ValueError(f"unknown env keys {unknown}; allowed: {', '.join(sorted(allowed))}")
+    return WorldConfig(**values)
+
+
+def result_exists(folder: str | Path) -> bool:
+    return RunResult.exists(folder)

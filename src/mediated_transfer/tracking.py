@@ -1,0 +1,239 @@
+"""MLflow tracking: one MLflow experiment per table, one MLflow run per learning run, and one
+summary run per table cell.
+
+A learning run's MLflow run holds the resolved config as params, the evaluation curve as the
+metric series ``mean_reward`` and ``success_rate`` (step = learning step), ``reward_loss`` and
+``time_to_threshold`` as metrics, and tags naming its table, cell, sweep, scale and seed.
+A run that never reaches the threshold has no ``time_to_threshold`` metric and the tag
+``time_to_threshold=never`` (a number would have to pretend a step).
+
+Logging is idempotent: every run carries a key (its output folder relative to paths.root) and
+is only created when no finished run with that key exists; a run left unfinished by an
+interruption is deleted and logged again. So re-running a sweep never duplicates a run.
+
+The default store is SQLite. SQLite cannot be initialised by several processes at once, so
+``prepare`` creates the store and the experiment once, before a sweep's workers start.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .results import RunResult
+
+KIND_RUN = "run"
+KIND_SUMMARY = "cell_summary"
+NEVER = "never"
+_MAX_PARAM_LENGTH = 6000  # MLflow's limit on a param value
+_BATCH = {"metrics": 1000, "params": 100, "tags": 100}  # MLflow's limits per log_batch call
+
+
+@dataclass(frozen=True)
+class TrackingSettings:
+    uri: str
+    """MLflow tracking URI: sqlite:///<file> (embedded) or http(s)://<server>."""
+    artifact_location: str | None = None
+    """Folder for the artifacts of newly created experiments (None: the server decides)."""
+
+    @classmethod
+    def from_config(cls, cfg: Mapping[str, Any]) -> "TrackingSettings":
+        uri = cfg.get("uri")
+        if not uri:
+            raise ValueError("tracking.uri is not set; e.g. tracking.uri=http://127.0.0.1:5000 "
+                             "(or tracking=sqlite for the embedded store, tracking=none to disable)")
+        return cls(str(uri), None if cfg.get("artifact_location") is None else str(cfg["artifact_location"]))
+
+    def client(self):
+        from mlflow.tracking import MlflowClient
+
+        if self.uri.startswith("sqlite:///"):
+            Path(self.uri.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
+        return MlflowClient(tracking_uri=self.uri)
+
+
+def prepare(settings: TrackingSettings, experiment: str) -> str:
+    """Create the store (if new) and the experiment (if missing); returns its id."""
+    client = settings.client()
+    return _experiment_id(client, settings, experiment)
+
+
+def _experiment_id(client, settings: TrackingSettings, name: str) -> str:
+    from mlflow.exceptions import MlflowException
+
+    found = client.get_experiment_by_name(name)
+    if found is not None:
+        if found.lifecycle_stage == "deleted":
+            client.restore_experiment(found.experiment_id)
+        return found.experiment_id
+    location = None
+    if settings.artifact_location is not None:
+        # One folder per experiment (table), as MLflow's own file layout has it.
+        location = (Path(settings.artifact_location).resolve() / name).as_uri()
+    try:
+        return client.create_experiment(name, artifact_location=location)
+    except MlflowException:
+        # Created meanwhile by another process.
+        found = client.get_experiment_by_name(name)
+        if found is None:
+            raise
+        return found.experiment_id
+
+
+def log_run(
+    settings: TrackingSettings,
+    experiment: str,
+    key: str,
+    run_name: str,
+    result: RunResult,
+    params: Mapping[str, Any],
+    tags: Mapping[str, str],
+    artifacts: Iterable[Path] = (),
+) -> str:
+    """Log one learning run unless a finished MLflow run with ``key`` exists; returns its id."""
+    from mlflow.entities import Metric
+
+    client = settings.client()
+    experiment_id = _experiment_id(client, settings, experiment)
+    existing = _existing(client, experiment_id, key)
+    if existing is not None:
+        return existing
+    metrics = [Metric("mean_reward", float(r), 0, int(s)) for s, r in zip(result.steps, result.mean_reward)]
+    metrics += [Metric("success_rate", float(p), 0, int(s)) for s, p in zip(result.steps, result.success_rate)]
+    scalars = {
+        "reward_loss": result.reward_loss,
+        "time_to_threshold": result.time_to_threshold,
+        "final_reward": result.mean_reward[-1] if result.mean_reward else None,
+        "learning_steps_per_s": result.learning_steps_per_s,
+        "wall_time_s": result.wall_time_s,
+        "source_tasks_solved": result.source_tasks_solved,
+        "source_phase_end": result.source_phase_end,
+        **{f"learner.{k}": v for k, v in result.learner_stats.items()},
+    }
+    metrics += [Metric(k, float(v), 0, 0) for k, v in scalars.items() if _is_number(v)]
+    all_tags = {**tags, "kind": KIND_RUN}
+    if result.time_to_threshold is None:
+        all_tags["time_to_threshold"] = NEVER
+    return _create(client, experiment_id, key, run_name, metrics, params, all_tags, artifacts)
+
+
+def log_summary(
+    settings: TrackingSettings,
+    experiment: str,
+    key: str,
+    run_name: str,
+    summary: Mapping[str, Any],
+    tags: Mapping[str, str],
+    artifacts: Iterable[Path] = (),
+    fingerprint: str = "",
+) -> str:
+    """Log the summary run of a table cell (output of metrics.summarise_runs).
+
+    Its key identifies the cell of a sweep. An existing summary with the same ``fingerprint``
+    (the data it summarises) is kept; one with another fingerprint is replaced, so a report
+    rebuilt after more runs finished updates the summary instead of adding a second one.
+    """
+    from mlflow.entities import Metric
+
+    client = settings.client()
+    experiment_id = _experiment_id(client, settings, experiment)
+    for run in _runs_with_key(client, experiment_id, key):
+        if run.info.status == "FINISHED" and run.data.tags.get("fingerprint") == fingerprint:
+            return run.info.run_id
+        client.delete_run(run.info.run_id)
+    steps = [int(s) for s in summary["steps"]]
+    metrics = [Metric("mean_reward", float(r), 0, s) for s, r in zip(steps, summary["mean_curve"])]
+    metrics += [Metric("mean_reward_sem", float(e), 0, s) for s, e in zip(steps, summary["sem_curve"])]
+    scalars = {k: summary.get(k) for k in (
+        "n_runs", "reward_loss_mean", "reward_loss_sem", "final_reward_mean", "final_reward_sem",
+        "time_to_threshold", "time_to_threshold_median", "runs_reaching_threshold")}
+    metrics += [Metric(k, float(v), 0, 0) for k, v in scalars.items() if _is_number(v, allow_nan=True)]
+    all_tags = {**tags, "kind": KIND_SUMMARY, "fingerprint": fingerprint}
+    if summary.get("time_to_threshold") is None:
+        all_tags["time_to_threshold"] = NEVER
+    return _create(client, experiment_id, key, run_name, metrics, {}, all_tags, artifacts)
+
+
+def find_runs(settings: TrackingSettings, experiment: str, filter_string: str = "") -> list:
+    """Active MLflow runs of ``experiment`` matching ``filter_string`` (MLflow's search syntax)."""
+    from mlflow.entities import ViewType
+
+    client = settings.client()
+    found = client.get_experiment_by_name(experiment)
+    if found is None:
+        return []
+    runs, token = [], None
+    while True:
+        page = client.search_runs([found.experiment_id], filter_string, ViewType.ACTIVE_ONLY,
+                                  max_results=1000, page_token=token)
+        runs += list(page)
+        token = page.token
+        if not token:
+            return runs
+
+
+def flatten(config: Mapping[str, Any], prefix: str = "") -> dict[str, str]:
+    """Nested config -> {"algorithm.lambda_": "0.9", ...}: MLflow params are flat strings."""
+    flat: dict[str, str] = {}
+    for key, value in config.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            flat.update(flatten(value, f"{name}."))
+        else:
+            flat[name] = str(value)[:_MAX_PARAM_LENGTH]
+    return flat
+
+
+def key_hash(key: str) -> str:
+    """Searchable form of a run key (a key may hold quotes, which a filter string cannot)."""
+    return hashlib.sha256(key.encode()).hexdigest()[:32]
+
+
+def _runs_with_key(client, experiment_id: str, key: str) -> list:
+    from mlflow.entities import ViewType
+
+    return list(client.search_runs([experiment_id], f"tags.run_key_hash = '{key_hash(key)}'",
+                                   ViewType.ACTIVE_ONLY, max_results=100))
+
+
+def _existing(client, experiment_id: str, key: str) -> str | None:
+    runs = _runs_with_key(client, experiment_id, key)
+    finished = [r.info.run_id for r in runs if r.info.status == "FINISHED"]
+    for run in runs:
+        if run.info.run_id not in finished[:1]:
+            # Left unfinished by an interruption (or a duplicate): log it again cleanly.
+            client.delete_run(run.info.run_id)
+    return finished[0] if finished else None
+
+
+def _create(client, experiment_id, key, run_name, metrics, params, tags, artifacts) -> str:
+    from mlflow.entities import Param
+
+    tags = {**{k: str(v) for k, v in tags.items()}, "run_key": key, "run_key_hash": key_hash(key)}
+    run = client.create_run(experiment_id, run_name=run_name, tags=tags)
+    run_id = run.info.run_id
+    params_list = [Param(k, v) for k, v in params.items()]
+    for i in range(0, len(metrics), _BATCH["metrics"]):
+        client.log_batch(run_id, metrics=metrics[i:i + _BATCH["metrics"]])
+    for i in range(0, len(params_list), _BATCH["params"]):
+        client.log_batch(run_id, params=params_list[i:i + _BATCH["params"]])
+    for path in artifacts:
+        # Hydra's record of the run (config, overrides) goes into a folder of its own.
+        client.log_artifact(run_id, str(path), "hydra" if Path(path).parent.name == ".hydra" else None)
+    # FINISHED last: a run interrupted before this line is recognised and redone.
+    client.set_terminated(run_id, "FINISHED")
+    return run_id
+
+
+def _is_number(value: Any, allow_nan: bool = False) -> bool:
+    if value is None or isinstance(value, bool):
+        return False
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return False
+    return math.isfinite(number) or (allow_nan and math.isnan(number))

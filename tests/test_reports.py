@@ -1,0 +1,171 @@
+"""Tables and figures from run outputs: built here from synthetic result folders with known
+curves, so every number in the table can be checked by hand."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+from PIL import Image
+
+from mediated_transfer import tracking
+from mediated_transfer.app import CONF_DIR
+from mediated_transfer.metrics import summarise_runs
+from mediated_transfer.reporting.__main__ import main as reporting_main
+from mediated_transfer.reporting.build import build_report
+from mediated_transfer.reporting.collect import collect_sweep
+from mediated_transfer.reporting.figures import fastest_transfer
+from mediated_transfer.reporting.paper import paper_rows
+
+from .test_tracking import fresh_store, synthetic_result
+
+# Smoke scale: budget 200, evaluated at steps 100 and 200, 2 seeds per row.
+CURVES = {
+    ("none", 0): [[2.0, 4.0], [4.0, 6.0]],      # L_R 14, 10: 12 +/- 2; never reaches 8
+    ("regular", 50): [[8.0, 9.0], [6.0, 9.0]],  # L_R 3, 5: 4 +/- 1; mean curve reaches 8 at 200
+    ("scaffolded", 15): [[9.0, 10.0]],          # one run only: L_R 1, no SEM; reaches 8 at 100
+}
+
+
+def compose_experiment(root: Path, *overrides: str):
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        return compose("config", overrides=["experiment=table2_rbf", "scale=smoke",
+                                            f"paths.root={root}", *overrides])
+
+
+def write_sweep(sweep_dir: Path, curves=CURVES, **kwargs) -> None:
+    for (strategy, n_source), runs in curves.items():
+        for seed, curve in enumerate(runs):
+            result = synthetic_result(strategy, n_source, seed, curve, (100, 200), **kwargs)
+            result.write(sweep_dir / f"{strategy}_{n_source}" / f"seed={seed}")
+
+
+@pytest.fixture
+def built(tmp_path):
+    cfg = compose_experiment(tmp_path, "tracking=none")
+    write_sweep(Path(cfg.paths.sweep_dir))
+    return cfg, build_report(cfg)
+
+
+def _row(markdown: str, scheme: str, n_source: int) -> list[str]:
+    for line in markdown.splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if cells[:2] == [scheme, str(n_source)]:
+            return cells
+    raise AssertionError(f"no row {scheme} {n_source} in\n{markdown}")
+
+
+def test_markdown_table_has_the_papers_rows_measured_values_and_paper_values(built):
+    cfg, report = built
+    md = (Path(cfg.paths.reports_dir) / "table2_rbf.md").read_text()
+    assert _row(md, "without transfer", 0) == [
+        "without transfer", "0", "2/2", "12.00 ± 2.00", "-", "- (0/2)", "105.1 ± 15.08", "~400,000"]
+    assert _row(md, "regular transfer", 50) == [
+        "regular transfer", "50", "2/2", "4.00 ± 1.00", "200", "150 (2/2)", "28.985 ± 5.33", "~70,000"]
+    assert _row(md, "scaffolded transfer", 15)[2:5] == ["1/2", "1.00 ± n/a", "100"]
+    assert _row(md, "regular transfer", 5000)[2:4] == ["0/2", "not run"]
+    assert "Scale `smoke`: 200 learning steps per run" in md and "not comparable" in md
+    assert "2 runs (seeds) per row" in md
+    assert report.runs == 5
+
+
+def test_every_paper_row_appears_once_in_the_papers_order(built):
+    cfg, _ = built
+    rows = list(csv.DictReader(io.StringIO((Path(cfg.paths.reports_dir) / "table2_rbf.csv").read_text())))
+    assert [(r["strategy"], int(r["n_source"])) for r in rows] == [
+        (p.strategy, p.n_source) for p in paper_rows("II")]
+    regular_50 = next(r for r in rows if r["strategy"] == "regular" and r["n_source"] == "50")
+    assert float(regular_50["reward_loss_mean"]) == 4.0 and float(regular_50["reward_loss_sem"]) == 1.0
+    assert regular_50["time_to_threshold"] == "200" and regular_50["paper_time_to_threshold"] == "70000"
+    assert regular_50["scale"] == "smoke" and regular_50["runs"] == "2"
+    never = next(r for r in rows if r["strategy"] == "none")
+    assert never["time_to_threshold"] == "" and never["paper_reward_loss_mean"] == "105.1"
+
+
+def test_latex_table_is_a_booktabs_tabular_with_one_line_per_row(built):
+    cfg, _ = built
+    tex = (Path(cfg.paths.reports_dir) / "table2_rbf.tex").read_text()
+    assert "\\begin{tabular}" in tex and "\\toprule" in tex and "\\bottomrule" in tex
+    body = tex.split("\\midrule")[1].split("\\bottomrule")[0].strip().splitlines()
+    assert len(body) == len(paper_rows("II"))
+    assert "4.00 $\\pm$ 1.00" in tex and "N\\_source" not in tex.split("\\caption")[0]
+
+
+def test_figure_compares_regular_learning_with_the_fastest_transfer(built):
+    cfg, report = built
+    assert report.figure == Path(cfg.paths.reports_dir) / "figure4_rbf.png"
+    with Image.open(report.figure) as image:
+        assert image.format == "PNG" and image.size[0] > 400
+
+
+def test_fastest_transfer_is_the_first_to_reach_the_threshold_then_lowest_loss():
+    steps = [100, 200, 300]
+    summaries = {
+        "none_0": summarise_runs([[9, 9, 9]], steps),          # fastest, but not a transfer
+        "regular_1": summarise_runs([[0, 9, 9]], steps),       # reaches at 200
+        "regular_15": summarise_runs([[0, 9, 10]], steps),     # also 200, lower L_R
+        "scaffolded_50": summarise_runs([[9, 0, 9]], steps),   # stable only from 300
+    }
+    strategies = {"none_0": ("none", 0), "regular_1": ("regular", 1), "regular_15": ("regular", 15),
+                  "scaffolded_50": ("scaffolded", 50)}
+    assert fastest_transfer(summaries, strategies) == "regular_15"
+    never = {k: summarise_runs([[0, 1, 2 + i]], steps) for i, k in enumerate(["regular_1", "regular_15"])}
+    assert fastest_transfer(never, strategies) == "regular_15"
+    assert fastest_transfer({"none_0": summaries["none_0"]}, strategies) is None
+
+
+def test_runs_of_another_learner_in_the_sweep_folder_are_refused(tmp_path):
+    cfg = compose_experiment(tmp_path, "tracking=none")
+    write_sweep(Path(cfg.paths.sweep_dir), {("none", 0): [[1.0, 2.0]]}, representation="fsr")
+    with pytest.raises(ValueError, match="representation='fsr'.*expects representation='rbf'"):
+        build_report(cfg)
+
+
+def test_variants_in_deeper_folders_are_not_part_of_the_table(tmp_path):
+    sweep = tmp_path / "sweep"
+    write_sweep(sweep, {("none", 0): [[1.0, 2.0]]})
+    synthetic_result("none", 0, 0, (5.0, 5.0), (100, 200)).write(sweep / "none_0/seed=0/algorithm.lambda_=0.5")
+    [cell] = collect_sweep(sweep).values()
+    assert [r.mean_reward for r in cell.results] == [[1.0, 2.0]]
+
+
+def test_no_runs_is_a_clear_error_naming_the_command(tmp_path):
+    cfg = compose_experiment(tmp_path, "tracking=none")
+    with pytest.raises(FileNotFoundError, match="python -m mediated_transfer experiment=table2_rbf scale=smoke"):
+        build_report(cfg)
+
+
+def test_summary_runs_per_cell_carry_the_table_and_figure_and_are_not_duplicated(tmp_path):
+    uri = fresh_store(tmp_path / "store")
+    cfg = compose_experiment(tmp_path, f"tracking.uri={uri}")
+    write_sweep(Path(cfg.paths.sweep_dir))
+    build_report(cfg)
+    build_report(cfg)  # rebuilding the same data keeps the same summaries
+    settings = tracking.TrackingSettings(uri)
+    runs = tracking.find_runs(settings, "table2_rbf", f"tags.kind = '{tracking.KIND_SUMMARY}'")
+    assert sorted(r.data.tags["cell"] for r in runs) == ["none_0", "regular_50", "scaffolded_15"]
+    regular = next(r for r in runs if r.data.tags["cell"] == "regular_50")
+    assert regular.data.metrics["reward_loss_mean"] == 4.0 and regular.data.metrics["n_runs"] == 2
+    artifacts = {a.path for a in settings.client().list_artifacts(regular.info.run_id)}
+    assert artifacts == {"table2_rbf.md", "table2_rbf.csv", "table2_rbf.tex", "figure4_rbf.png"}
+
+    # One more finished run changes the data: the summaries are replaced, not added to.
+    synthetic_result("regular", 50, 2, (9.0, 9.0), (100, 200)).write(Path(cfg.paths.sweep_dir) / "regular_50/seed=2")
+    build_report(cfg)
+    runs = tracking.find_runs(settings, "table2_rbf", f"tags.kind = '{tracking.KIND_SUMMARY}'")
+    assert len(runs) == 3
+    assert next(r for r in runs if r.data.tags["cell"] == "regular_50").data.metrics["n_runs"] == 3
+
+
+def test_command_line_builds_the_named_experiments(tmp_path, capsys):
+    cfg = compose_experiment(tmp_path, "tracking=none")
+    write_sweep(Path(cfg.paths.sweep_dir))
+    code = reporting_main(["experiment=table2_rbf", "scale=smoke", f"paths.root={tmp_path}", "tracking=none"])
+    assert code == 0
+    assert "table2_rbf: 5 runs" in capsys.readouterr().out
+    assert (tmp_path / "reports" / "table2_rbf.md").is_file()
+    with pytest.raises(SystemExit, match="allowed: table2_rbf, table3_fsr, table4_dnn"):
+        reporting_main(["experiment=table9"])

@@ -1,0 +1,170 @@
+"""End to end at smoke scale, in temporary folders: every experiment sweeps, reports and tracks;
+an interrupted sweep completes on re-running without recomputing or duplicating a run; a
+single run is skipped when its result exists; the submitit local launcher runs jobs."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from hydra.core.global_hydra import GlobalHydra
+
+from mediated_transfer import tracking
+from mediated_transfer.app import CONF_DIR, ConfigError, cli, run_job
+from mediated_transfer.reporting.__main__ import main as reporting_main
+from mediated_transfer.reporting.paper import paper_rows
+from mediated_transfer.results import RunResult
+
+from .test_tracking import fresh_store
+
+PAPER_TABLE = {"table2_rbf": "II", "table3_fsr": "III", "table4_dnn": "IV"}
+SMOKE_SEEDS = 2
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="session")
+def source_cache(tmp_path_factory) -> Path:
+    """One source task cache for the whole session: each set is clustered once."""
+    return tmp_path_factory.mktemp("source_task_cache")
+
+
+@pytest.fixture
+def root(tmp_path) -> Path:
+    fresh_store(tmp_path)  # paths.mlflow_db = <root>/mlflow.db, already initialised
+    return tmp_path
+
+
+def _common(root: Path, cache: Path) -> list[str]:
+    return ["scale=smoke", f"paths.root={root}", f"paths.cache_dir={cache}"]
+
+
+def _run_cli(*args: str) -> None:
+    """``python -m mediated_transfer ...`` in this process (jobs run in it with the basic launcher)."""
+    GlobalHydra.instance().clear()
+    saved = sys.argv
+    try:
+        sys.argv = ["mediated_transfer"]
+        cli(list(args))
+    finally:
+        sys.argv = saved
+        GlobalHydra.instance().clear()
+
+
+def _results(sweep_dir: Path) -> dict[str, Path]:
+    return {p.parent.relative_to(sweep_dir).as_posix(): p for p in sweep_dir.glob("*/seed=*/result.json")}
+
+
+def _settings(root: Path) -> tracking.TrackingSettings:
+    return tracking.TrackingSettings(f"sqlite:///{root / 'mlflow.db'}")
+
+
+@pytest.mark.parametrize("experiment", sorted(PAPER_TABLE))
+def test_experiment_runs_end_to_end_and_is_found_in_mlflow(root, source_cache, experiment):
+    common = _common(root, source_cache)
+    _run_cli(f"experiment={experiment}", "hydra/launcher=basic", *common)
+
+    sweep_dir = root / "multirun" / experiment / "smoke"
+    rows = paper_rows(PAPER_TABLE[experiment])
+    expected = {f"{r.cell}/seed={s}" for r in rows for s in range(SMOKE_SEEDS)}
+    assert set(_results(sweep_dir)) == expected
+
+    assert reporting_main([f"experiment={experiment}", *common]) == 0
+    figure = {"table2_rbf": "figure4_rbf", "table3_fsr": "figure5_fsr", "table4_dnn": "figure3_dnn"}[experiment]
+    for name in (f"{experiment}.md", f"{experiment}.csv", f"{experiment}.tex", f"{figure}.png"):
+        assert (root / "reports" / name).stat().st_size > 0
+    assert f"| {SMOKE_SEEDS}/{SMOKE_SEEDS} |" in (root / "reports" / f"{experiment}.md").read_text()
+
+    settings = _settings(root)
+    runs = tracking.find_runs(settings, experiment, f"tags.kind = 'run' and tags.sweep = '{experiment}/smoke'")
+    assert sorted(f"{r.data.tags['cell']}/seed={r.data.tags['seed']}" for r in runs) == sorted(expected)
+    some = runs[0]
+    assert "reward_loss" in some.data.metrics and some.data.params["scale.budget"] == "200"
+    history = settings.client().get_metric_history(some.info.run_id, "mean_reward")
+    assert sorted(m.step for m in history) == [100, 200]
+    summaries = tracking.find_runs(settings, experiment, "tags.kind = 'cell_summary'")
+    assert sorted(r.data.tags["cell"] for r in summaries) == sorted(r.cell for r in rows)
+
+
+def test_interrupted_sweep_completes_on_rerun_without_recomputing_or_duplicating(root, source_cache):
+    args = ["experiment=table2_rbf", "cell=none_0,regular_1,scaffolded_15",
+            "scale.seeds=3", *_common(root, source_cache)]
+    sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
+    # The default launcher (joblib, 2 workers here), killed outright once a run has finished.
+    process = subprocess.Popen([sys.executable, "-m", "mediated_transfer", "hydra.launcher.n_jobs=2", *args],
+                               cwd=CONF_DIR.parent, start_new_session=True,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not _results(sweep_dir) and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+        _, stderr = process.communicate()
+    before = {k: (p.stat().st_mtime_ns, p.read_text()) for k, p in _results(sweep_dir).items()}
+    assert before, f"no run finished before the kill:\n{stderr}"
+
+    _run_cli(*args, "hydra/launcher=basic")
+
+    after = _results(sweep_dir)
+    assert set(after) == {f"{c}/seed={s}" for c in ("none_0", "regular_1", "scaffolded_15") for s in range(3)}
+    for key, (mtime, text) in before.items():  # finished runs were read back, not recomputed
+        assert (after[key].stat().st_mtime_ns, after[key].read_text()) == (mtime, text)
+    runs = tracking.find_runs(_settings(root), "table2_rbf", "tags.kind = 'run'")
+    keys = [r.data.tags["run_key"] for r in runs]
+    assert len(keys) == len(set(keys)) == 9
+    assert all(r.info.status == "FINISHED" for r in runs)
+    log = "".join(p.read_text() for p in sweep_dir.glob("*/seed=*/mediated_transfer.log"))
+    assert re.search(r"\[table2_rbf/smoke \d/9(, ~\S+ left)?\] \w+ seed=\d: L_R=[\d.]+, [\d,]+ steps/s", log)
+
+
+def test_single_run_is_skipped_when_its_result_exists(root, source_cache):
+    args = ["strategy=regular", "n_source=15", "seed=1", *_common(root, source_cache)]
+    _run_cli(*args)
+    folder = root / "runs" / "linear_q_rbf" / "smoke" / "regular_15" / "seed=1"
+    first = (folder / "result.json").stat().st_mtime_ns
+    _run_cli(*args)
+    assert (folder / "result.json").stat().st_mtime_ns == first
+    assert "found, skipped" in (folder / "mediated_transfer.log").read_text()
+
+    # An override that changes the run gets a folder of its own, and its config is recorded.
+    _run_cli(*args, "algorithm.lambda_=0.5")
+    variant = RunResult.read(folder / "algorithm.lambda_=0.5")
+    assert variant.config["algorithm"]["lambda_"] == 0.5
+    runs = tracking.find_runs(_settings(root), "linear_q_rbf", "tags.cell = 'regular_15'")
+    assert len(runs) == 2
+
+
+def test_a_folder_holding_another_configuration_is_refused(root, source_cache):
+    from hydra import compose, initialize_config_dir
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose("config", overrides=[*_common(root, source_cache), "tracking=none"])
+    folder = root / "run"
+    run_job(cfg, folder)
+    stored = json.loads((folder / "result.json").read_text())
+    stored["config"]["algorithm"]["lambda_"] = 0.5
+    (folder / "result.json").write_text(json.dumps(stored))
+    with pytest.raises(ConfigError, match=rf"algorithm_params.lambda_: stored 0.5, now {cfg.algorithm.lambda_}"):
+        run_job(cfg, folder)
+
+
+def test_submitit_local_launcher_runs_the_jobs(root, source_cache):
+    result = subprocess.run(
+        [sys.executable, "-m", "mediated_transfer", "experiment=table2_rbf", "hydra/launcher=submitit_local",
+         "cell=none_0,regular_1", "scale.seeds=1", *_common(root, source_cache)],
+        cwd=CONF_DIR.parent, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-3000:]
+    sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
+    assert set(_results(sweep_dir)) == {"none_0/seed=0", "regular_1/seed=0"}
+    assert list((sweep_dir / ".submitit").iterdir())  # the jobs went through submitit
+    runs = tracking.find_runs(_settings(root), "table2_rbf", "tags.kind = 'run'")
+    assert len(runs) == 2

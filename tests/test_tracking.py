@@ -1,0 +1,153 @@
+"""MLflow tracking: what a learning run logs, that logging twice never duplicates, that a run
+left unfinished by an interruption is redone, and that parallel workers can share the SQLite
+store once it has been prepared."""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mediated_transfer import tracking
+from mediated_transfer.results import RunResult
+
+_TEMPLATE: dict[str, Path] = {}
+
+
+def fresh_store(folder: Path) -> str:
+    """A SQLite tracking URI in ``folder``, copied from an empty store made once per session
+    (creating MLflow's tables takes seconds; copying the file does not)."""
+    if "db" not in _TEMPLATE:
+        import tempfile
+
+        template = Path(tempfile.mkdtemp(prefix="mlflow-template-")) / "mlflow.db"
+        tracking.TrackingSettings(f"sqlite:///{template}").client().search_experiments()
+        _TEMPLATE["db"] = template
+    folder.mkdir(parents=True, exist_ok=True)
+    shutil.copy(_TEMPLATE["db"], folder / "mlflow.db")
+    return f"sqlite:///{folder / 'mlflow.db'}"
+
+
+def synthetic_result(strategy="regular", n_source=15, seed=0, curve=(2.0, 6.0, 9.0), steps=(100, 200, 300),
+                     algorithm="linear_q", representation="rbf") -> RunResult:
+    from mediated_transfer.metrics import reward_loss, time_to_threshold
+
+    return RunResult(
+        algorithm=algorithm, representation=representation, strategy=strategy, n_source=n_source,
+        seed=seed, budget=steps[-1], steps=list(steps), mean_reward=list(curve),
+        success_rate=[c / 10 for c in curve], reward_loss=reward_loss(curve),
+        time_to_threshold=time_to_threshold(steps, curve), source_phase_end=None,
+        source_tasks_solved=0, wall_time_s=1.5, learning_steps_per_s=200.0,
+        learner_stats={"episodes": 7.0},
+    )
+
+
+@pytest.fixture
+def settings(tmp_path) -> tracking.TrackingSettings:
+    return tracking.TrackingSettings(fresh_store(tmp_path), str(tmp_path / "artifacts"))
+
+
+def _log(settings, result, key="multirun/t/quick/regular_15/seed=0@abc", artifacts=()):
+    return tracking.log_run(settings, "table_x", key=key, run_name="regular_15/seed=0", result=result,
+                            params={"algorithm.lambda_": "0.75", "seed": "0"},
+                            tags={"table": "table_x", "cell": "regular_15", "sweep": "table_x/quick"},
+                            artifacts=artifacts)
+
+
+def test_a_run_logs_config_curve_metrics_and_tags(settings, tmp_path):
+    result = synthetic_result()
+    artifact = tmp_path / "curve.csv"
+    artifact.write_text("step,mean_reward\n")
+    run_id = _log(settings, result, artifacts=[artifact])
+
+    [run] = tracking.find_runs(settings, "table_x", "tags.cell = 'regular_15' and tags.sweep = 'table_x/quick'")
+    assert run.info.run_id == run_id and run.info.status == "FINISHED"
+    assert run.data.params == {"algorithm.lambda_": "0.75", "seed": "0"}
+    assert run.data.metrics["reward_loss"] == pytest.approx(result.reward_loss)
+    assert run.data.metrics["time_to_threshold"] == 300
+    assert run.data.tags["kind"] == tracking.KIND_RUN
+    history = settings.client().get_metric_history(run_id, "mean_reward")
+    assert sorted((m.step, m.value) for m in history) == [(100, 2.0), (200, 6.0), (300, 9.0)]
+    assert [a.path for a in settings.client().list_artifacts(run_id)] == ["curve.csv"]
+
+
+def test_never_reaching_the_threshold_is_a_tag_not_a_number(settings):
+    _log(settings, synthetic_result(curve=(1.0, 2.0, 3.0)))
+    [run] = tracking.find_runs(settings, "table_x")
+    assert "time_to_threshold" not in run.data.metrics
+    assert run.data.tags["time_to_threshold"] == tracking.NEVER
+
+
+def test_logging_the_same_run_again_does_not_duplicate_it(settings):
+    first = _log(settings, synthetic_result())
+    assert _log(settings, synthetic_result()) == first
+    _log(settings, synthetic_result(seed=1), key="multirun/t/quick/regular_15/seed=1@abc")
+    assert len(tracking.find_runs(settings, "table_x")) == 2
+
+
+def test_a_run_interrupted_while_logging_is_logged_again(settings):
+    key = "multirun/t/quick/regular_15/seed=0@abc"
+    client = settings.client()
+    experiment_id = tracking.prepare(settings, "table_x")
+    # What a kill between create_run and set_terminated leaves behind.
+    partial = client.create_run(experiment_id, tags={"run_key": key, "run_key_hash": tracking.key_hash(key)})
+    run_id = _log(settings, synthetic_result(), key=key)
+    runs = tracking.find_runs(settings, "table_x")
+    assert [r.info.run_id for r in runs] == [run_id] != [partial.info.run_id]
+    assert runs[0].info.status == "FINISHED"
+
+
+def test_summary_is_replaced_when_its_data_changes(settings, tmp_path):
+    from mediated_transfer.metrics import summarise_runs
+
+    summary = summarise_runs([[2.0, 9.0], [4.0, 9.0]], [100, 200])
+    kwargs = dict(key="summary/table_x/quick/regular_15", run_name="regular_15 (summary)",
+                  summary=summary, tags={"table": "table_x", "cell": "regular_15"})
+    first = tracking.log_summary(settings, "table_x", fingerprint="a", **kwargs)
+    assert tracking.log_summary(settings, "table_x", fingerprint="a", **kwargs) == first
+    second = tracking.log_summary(settings, "table_x", fingerprint="b", **kwargs)
+    [run] = tracking.find_runs(settings, "table_x", f"tags.kind = '{tracking.KIND_SUMMARY}'")
+    assert run.info.run_id == second != first
+    assert run.data.metrics["reward_loss_mean"] == pytest.approx(summary["reward_loss_mean"])
+    assert run.data.metrics["time_to_threshold"] == 200
+
+
+def test_summary_of_a_single_run_logs_its_undefined_sem_as_nan(settings):
+    from mediated_transfer.metrics import summarise_runs
+
+    tracking.log_summary(settings, "table_x", key="s", run_name="s", tags={}, fingerprint="a",
+                         summary=summarise_runs([[2.0, 9.0]], [100, 200]))
+    [run] = tracking.find_runs(settings, "table_x")
+    assert math.isnan(run.data.metrics["reward_loss_sem"])
+    assert run.data.metrics["n_runs"] == 1
+
+
+def test_missing_server_uri_is_a_clear_error():
+    with pytest.raises(ValueError, match="tracking.uri"):
+        tracking.TrackingSettings.from_config({"enabled": True, "uri": None})
+
+
+def test_flatten_gives_dotted_string_params():
+    assert tracking.flatten({"algorithm": {"lambda_": 0.8, "name": "linear_q"}, "seed": 3}) == {
+        "algorithm.lambda_": "0.8", "algorithm.name": "linear_q", "seed": "3"}
+
+
+def _worker(args):
+    uri, seed = args
+    settings = tracking.TrackingSettings(uri)
+    for i in range(3):
+        tracking.log_run(settings, "table_x", key=f"k/{seed}/{i}", run_name=f"{seed}/{i}",
+                         result=synthetic_result(seed=seed), params={"seed": str(seed)}, tags={})
+    return seed
+
+
+def test_parallel_workers_share_a_prepared_sqlite_store(tmp_path):
+    uri = fresh_store(tmp_path)
+    tracking.prepare(tracking.TrackingSettings(uri), "table_x")
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        assert sorted(pool.map(_worker, [(uri, 0), (uri, 1)])) == [0, 1]
+    runs = tracking.find_runs(tracking.TrackingSettings(uri), "table_x")
+    assert sorted(r.data.tags["run_key"] for r in runs) == sorted(f"k/{s}/{i}" for s in (0, 1) for i in range(3))
