@@ -63,18 +63,18 @@ def test_defaults_keep_what_the_paper_fixes():
 
 
 @pytest.mark.parametrize("overrides, key", [
-    ({"gamma": 1.0}, "learner.gamma"),
-    ({"gamma": -0.1}, "learner.gamma"),
-    ({"learning_rate": -1e-3}, "learner.learning_rate"),
-    ({"learning_rate": 0.0}, "learner.learning_rate"),
-    ({"buffer_size": 16, "batch_size": 32, "learning_starts": 0}, "learner.buffer_size"),
-    ({"learning_starts": 5_000, "buffer_size": 1_000}, "learner.learning_starts"),
-    ({"epsilon_end": 1.5}, "learner.epsilon_end"),
-    ({"epsilon_start": -0.1}, "learner.epsilon_start"),
-    ({"batch_size": 0}, "learner.batch_size"),
-    ({"train_frequency": 2.5}, "learner.train_frequency"),
-    ({"max_grad_norm": 0.0}, "learner.max_grad_norm"),
-    ({"huber_delta": -1.0}, "learner.huber_delta"),
+    ({"gamma": 1.0}, "algorithm.gamma"),
+    ({"gamma": -0.1}, "algorithm.gamma"),
+    ({"learning_rate": -1e-3}, "algorithm.learning_rate"),
+    ({"learning_rate": 0.0}, "algorithm.learning_rate"),
+    ({"buffer_size": 16, "batch_size": 32, "learning_starts": 0}, "algorithm.buffer_size"),
+    ({"learning_starts": 5_000, "buffer_size": 1_000}, "algorithm.learning_starts"),
+    ({"epsilon_end": 1.5}, "algorithm.epsilon_end"),
+    ({"epsilon_start": -0.1}, "algorithm.epsilon_start"),
+    ({"batch_size": 0}, "algorithm.batch_size"),
+    ({"train_frequency": 2.5}, "algorithm.train_frequency"),
+    ({"max_grad_norm": 0.0}, "algorithm.max_grad_norm"),
+    ({"huber_delta": -1.0}, "algorithm.huber_delta"),
 ])
 def test_bad_hyperparameters_raise_naming_the_key(overrides, key):
     with pytest.raises(ValueError, match=key.replace(".", r"\.")):
@@ -304,3 +304,17 @@ def test_sb3_twin_computes_the_same_network():
     with torch.no_grad():
         theirs = sb3.q_net(torch.tensor(obs, dtype=torch.float32)).numpy()
     np.testing.assert_allclose(theirs, [ours.q_values(o) for o in obs], rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.slow
+def test_speed_bench_runs_side_by_side():
+    """`make bench`'s DQN part end to end on a tiny budget (no timing asserted)."""
+    pytest.importorskip("stable_baselines3")
+    from mediated_transfer.bench import dqn_speed
+
+    cfg = DQNConfig(buffer_size=1_000, learning_starts=100)
+    result = dqn_speed.run(100, config=cfg, rounds=2, warmup_steps=200, verbose=False)
+    assert result["timed_steps"] == 100 and result["buffer_size"] == 1_000
+    assert result["network_parameters"] == DQNLearner(cfg).network.flat.numel()
+    for key in ("ours_steps_per_s", "sb3_steps_per_s", "ratio", "update_flop_fraction"):
+        assert np.isfinite(result[key]) and result[key] > 0

@@ -88,7 +88,7 @@ def test_rbf_raw_gaussians_on_a_hand_computed_state():
     assert phi[centre] == pytest.approx(1.0)
     # One centre further in the first dimension: (4 - 8)^2 / 2 = 8.
     assert phi[grid_index((2, 2, 3, 0, 1, 2))] == pytest.approx(math.exp(-8))
-    # One step in two dimensions, exp(-(16 + 16) / 2) = 1.1e-7, is below the 1e-6 cutoff:
+    # One step in two dimensions, exp(-(16 + 16) / 2) = 1.1e-7, is below the 1e-5 cutoff:
     # dropped from the sparse features, present in the dense reference.
     two_steps = grid_index((1, 1, 3, 0, 1, 3))
     assert phi[two_steps] == 0.0
@@ -118,14 +118,14 @@ def test_rbf_normalised_is_the_gaussian_over_the_separable_grid_sum():
     assert phi[3270] == pytest.approx(1.0 / total, rel=1e-12)
     assert rep.dense_features(observation(s, M1))[:13824].sum() == pytest.approx(1.0, abs=1e-12)
     # The sparse features are the dense ones minus Gaussians below the cutoff: a tiny mass.
-    assert 1.0 - 1e-5 < phi[:13824].sum() <= 1.0
+    assert 1.0 - 1e-4 < phi[:13824].sum() <= 1.0
     np.testing.assert_array_equal(phi[13824:], [1, 0, 0, 0, 0])
 
 
 def test_rbf_keeps_only_a_few_gaussians():
     rep = RBFRepresentation()
     counts = [len(rep.features(s)[0]) for s in realistic_states(200, seed=1)]
-    # Centres 4 sigma apart and a 1e-6 cutoff leave at most 3 centres per dimension and,
+    # Centres 4 sigma apart and a 1e-5 cutoff leave at most 3 centres per dimension and,
     # after the product cutoff, well under a hundred Gaussians (plus the one active bit).
     assert max(counts) <= 3**6 + 1
     assert 5 < np.mean(counts) < 100
@@ -133,16 +133,16 @@ def test_rbf_keeps_only_a_few_gaussians():
 
 @pytest.mark.parametrize("normalize", [True, False])
 def test_rbf_sparse_q_values_match_the_dense_computation(normalize):
-    """Tolerance: ||phi_dense - phi_sparse||_1 <= 1e-4 (measured ~2e-5 with cutoff 1e-6), so
-    |Q_sparse - Q_dense| <= 1e-4 * max|theta| for every action."""
+    """Tolerance: ||phi_dense - phi_sparse||_1 <= 3e-4 (cutoff 1e-5: 4e-5 on average, 1.2e-4
+    at most over 1500 states), so |Q_sparse - Q_dense| <= 3e-4 * max|theta| for every action."""
     rep = RBFRepresentation(RBFConfig(normalize=normalize))
     learner = LinearQLearner(LinearQConfig(), rep)
     rng = np.random.default_rng(2)
     learner.theta[:] = rng.uniform(-10, 10, learner.theta.shape)
-    bound = 1e-4 * np.abs(learner.theta).max()
+    bound = 3e-4 * np.abs(learner.theta).max()
     for s in realistic_states(150, seed=3):
         phi_dense = rep.dense_features(s)
-        assert np.abs(phi_dense - dense(rep, s)).sum() <= 1e-4
+        assert np.abs(phi_dense - dense(rep, s)).sum() <= 3e-4
         np.testing.assert_allclose(learner.q_values(s), learner.theta @ phi_dense, rtol=0, atol=bound)
 
 
@@ -195,6 +195,14 @@ def test_fsr_has_exactly_one_active_feature_per_entry():
         assert len(index) == 11 and np.all(value == 1.0)
         owner = np.where(index < 300, index // 50, 6 + (index - 300) // 2)
         assert sorted(owner.tolist()) == list(range(11))
+
+
+@pytest.mark.parametrize("rep", [RBFRepresentation(), FSRRepresentation()], ids=["rbf", "fsr"])
+def test_active_indices_are_strictly_ascending(rep):
+    # The learner merges phi(s, a) into its index-sorted trace in one pass: it relies on this.
+    for s in realistic_states(100, seed=5):
+        index, _ = rep.features(s)
+        assert np.all(np.diff(index) > 0)
 
 
 # --- bad input ----------------------------------------------------------------------------------

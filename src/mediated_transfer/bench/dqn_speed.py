@@ -26,7 +26,6 @@ import time
 from typing import Callable
 
 import gymnasium
-import numpy as np
 import torch
 
 from ..env.task import NUM_DISTANCES
@@ -67,12 +66,15 @@ def paper_features_extractor():
     return PaperFeatures
 
 
-def make_sb3_dqn(config: DQNConfig, env: gymnasium.Env, seed: int):
-    """Stable-Baselines3 DQN with the same network and hyperparameters as ``config``."""
+def make_sb3_dqn(config: DQNConfig, env: gymnasium.Env, seed: int, warmup_steps: int = WARMUP_STEPS):
+    """Stable-Baselines3 DQN with the same network and hyperparameters as ``config``; its
+    epsilon decay ends within a first ``learn(warmup_steps)`` call, as ours does."""
     from stable_baselines3 import DQN
 
     if config.epsilon_decay_steps <= 0:
-        raise ValueError("the SB3 comparison needs learner.epsilon_decay_steps > 0")
+        raise ValueError("the SB3 comparison needs algorithm.epsilon_decay_steps > 0")
+    if config.huber_delta != 1.0:  # SB3 hard-codes smooth_l1_loss, i.e. Huber with delta 1
+        raise ValueError(f"the SB3 comparison needs algorithm.huber_delta == 1, got {config.huber_delta}")
     return DQN(
         "MlpPolicy", env, seed=seed, device="cpu", verbose=0,
         learning_rate=config.learning_rate, gamma=config.gamma,
@@ -82,7 +84,7 @@ def make_sb3_dqn(config: DQNConfig, env: gymnasium.Env, seed: int):
         exploration_initial_eps=config.epsilon_start, exploration_final_eps=config.epsilon_end,
         # SB3's schedule runs over a fraction of each learn() call; the bench times only
         # steps after the warm-up call, whose fraction covers the decay.
-        exploration_fraction=min(1.0, config.epsilon_decay_steps / WARMUP_STEPS),
+        exploration_fraction=min(1.0, config.epsilon_decay_steps / warmup_steps),
         max_grad_norm=float("inf") if config.max_grad_norm is None else config.max_grad_norm,
         policy_kwargs=dict(
             features_extractor_class=paper_features_extractor(),
@@ -137,26 +139,28 @@ def matmul_gflops(size: int = MATMUL_SIZE, repeats: int = 20) -> float:
 
 def run(steps: int = 5_000, *, config: DQNConfig | None = None,
         make_env: Callable[[], gymnasium.Env] = _make_target_env, seed: int = 0,
-        rounds: int = ROUNDS, verbose: bool = True) -> dict:
-    """Measure our DQN and SB3's DQN side by side for ``steps`` timed learning steps each."""
+        rounds: int = ROUNDS, warmup_steps: int = WARMUP_STEPS, verbose: bool = True) -> dict:
+    """Measure our DQN and SB3's DQN side by side for ``steps`` timed learning steps each
+    (after ``warmup_steps`` untimed ones), with ``config`` (default: ``DQNConfig()``)."""
     if steps < rounds:
         raise ValueError(f"steps must be >= rounds ({rounds}), got {steps}")
     base = config if config is not None else DQNConfig()
-    if base.learning_starts > WARMUP_STEPS:
-        raise ValueError(f"learner.learning_starts must be <= the bench warm-up ({WARMUP_STEPS})")
+    if base.learning_starts >= warmup_steps:
+        raise ValueError(f"algorithm.learning_starts ({base.learning_starts}) must be below the "
+                         f"bench warm-up ({warmup_steps} steps)")
     # The timed part should run at the final epsilon, like the bulk of a 500k-step run.
-    config = DQNConfig(**{**base.to_dict(), "epsilon_decay_steps": WARMUP_STEPS // 2})
+    config = DQNConfig(**{**base.to_dict(), "epsilon_decay_steps": warmup_steps // 2})
     torch.set_num_threads(config.torch_threads)
 
     ours = _OurLoop(DQNLearner(config, seed=seed), make_env(), seed)
-    sb3 = make_sb3_dqn(config, make_env(), seed)
+    sb3 = make_sb3_dqn(config, make_env(), seed, warmup_steps)
     ours_params = ours.learner.network.flat.numel()
     sb3_params = sum(p.numel() for p in sb3.q_net.parameters())
     if ours_params != sb3_params:
         raise RuntimeError(f"networks differ: ours {ours_params} parameters, SB3 {sb3_params}")
 
-    ours.advance(WARMUP_STEPS)
-    sb3.learn(WARMUP_STEPS)
+    ours.advance(warmup_steps)
+    sb3.learn(warmup_steps)
     torch.set_num_threads(config.torch_threads)  # in case SB3 changed it
     chunk = steps // rounds
     ours_rates, sb3_rates = [], []

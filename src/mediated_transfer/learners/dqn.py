@@ -1,22 +1,24 @@
-"""The paper's deep Q-learner (Sec. IV; Mnih et al. 2015): network, replay buffer, update, learner.
+"""The paper's deep Q-learner (Sec. V, Fig. 2; Mnih et al. 2015): network, replay buffer,
+update, learner.
 
-The network (Fig. 2) sees the sensor vector of eq. (2) in two parts: the 6 distances pass
-through 3 fully connected ReLU layers of 256 units; the 5-dim one-hot of the active picking
-location, already a compact feature, is concatenated to the last hidden layer; a linear layer
-maps that to the 11 action values. A target network, copied every tau learning steps, gives the
-bootstrap values; transitions go into a replay buffer of size E and learning starts once it holds
-E_start of them; Adam with a constant learning rate minimises the Huber loss of the TD error;
-epsilon decays linearly from 1 to 0.1.
+The network sees the sensor vector of eq. (2) in two parts: the 6 distances pass through 3
+fully connected ReLU layers of 256 units; the 5-dim one-hot of the active picking location,
+already a compact feature, is concatenated to the last hidden layer; a linear layer maps that to
+the 11 action values. A target network, copied every tau learning steps, gives the bootstrap
+values; transitions go into a replay buffer of size E and learning starts once it holds E_start
+of them; Adam with a constant learning rate minimises the Huber loss of the TD error; epsilon
+decays linearly from 1 to 0.1.
 
 Speed (660 runs of 500k learning steps on two cores) shapes the implementation, not the maths:
 - all weights of a network live in one flat vector, so the target copy is one vector copy and
   Adam one fused pass (numba) instead of one per tensor;
-- the update runs forward and backward by hand on preallocated buffers: for a 4-layer MLP,
-  autograd's bookkeeping costs more than the matrix products themselves;
-- acting uses numpy views of the live weights (no copy, always current), which costs a few
-  microseconds where a torch forward of one observation costs tens.
+- the update runs forward and backward by hand on preallocated buffers (torch matrix
+  products, small numba kernels for the rest): for a 4-layer MLP on a batch of 32, autograd's
+  and the optimiser's bookkeeping cost more than the matrix products themselves;
+- acting reads the live weights through numpy views (no copy, always current) in a compiled
+  loop: ~10 us where a torch forward of one observation costs ~50-100 us.
 ``QNetwork.forward`` is the plain autograd reference of the same function; the tests check
-that the hand-written gradient and Adam step agree with autograd and ``torch.optim.Adam``.
+that the hand-written update agrees with autograd + ``torch.optim.Adam``.
 """
 
 from __future__ import annotations
@@ -88,7 +90,7 @@ class DQNConfig:
 
     def __post_init__(self) -> None:
         def fail(key: str, allowed: str) -> None:
-            raise ValueError(f"learner.{key} must be {allowed}, got {getattr(self, key)!r}")
+            raise ValueError(f"algorithm.{key} must be {allowed}, got {getattr(self, key)!r}")
 
         for key in ("batch_size", "buffer_size", "train_frequency", "target_update_interval",
                     "hidden_size", "num_hidden_layers", "torch_threads"):
@@ -117,12 +119,12 @@ class DQNConfig:
             fail("adam_epsilon", "> 0")
         if self.buffer_size < self.batch_size:
             raise ValueError(
-                f"learner.buffer_size ({self.buffer_size}) must be >= learner.batch_size "
+                f"algorithm.buffer_size ({self.buffer_size}) must be >= algorithm.batch_size "
                 f"({self.batch_size}): the replay buffer must hold at least one batch"
             )
         if self.learning_starts > self.buffer_size:
             raise ValueError(
-                f"learner.learning_starts ({self.learning_starts}) must be <= learner.buffer_size "
+                f"algorithm.learning_starts ({self.learning_starts}) must be <= algorithm.buffer_size "
                 f"({self.buffer_size}), or learning would never start"
             )
 
@@ -133,7 +135,8 @@ class DQNConfig:
 # --------------------------------------------------------------------------------------------
 # Network
 # --------------------------------------------------------------------------------------------
-def layer_shapes(hidden_size: int, num_hidden_layers: int, num_actions: int) -> list[tuple[int, int]]:
+def layer_shapes(hidden_size: int, num_hidden_layers: int,
+                 num_actions: int) -> list[tuple[int, int]]:
     """(out, in) of each linear layer: the hidden layers on the distances, then the head on
     [last hidden layer, one-hot picking location]."""
     shapes = [(hidden_size, NUM_DISTANCES)]
@@ -144,7 +147,8 @@ def layer_shapes(hidden_size: int, num_hidden_layers: int, num_actions: int) -> 
 
 def forward_flops(hidden_size: int, num_hidden_layers: int, num_actions: int) -> int:
     """Floating-point operations (2 per multiply-add) of one observation's forward pass."""
-    return sum(2 * out * inp for out, inp in layer_shapes(hidden_size, num_hidden_layers, num_actions))
+    shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions)
+    return sum(2 * out * inp for out, inp in shapes)
 
 
 class QNetwork(nn.Module):
@@ -217,7 +221,8 @@ class ReplayBuffer:
             "bootstrap": rows[:, self.BOOTSTRAP],
         }
 
-    def add(self, observation, action: int, reward: float, next_observation, terminated: bool) -> None:
+    def add(self, observation, action: int, reward: float, next_observation,
+            terminated: bool) -> None:
         row = self.transitions[self.position]
         row[self.OBSERVATION] = observation
         row[self.ACTION] = action
@@ -261,7 +266,8 @@ def _adam_step(params, grad, mean, sq_mean, step_size, beta1, beta2, eps, bias2,
 
 
 @numba.njit(fastmath=True, error_model="numpy", cache=True)
-def _huber_td_gradient(q, target_q, actions, rewards, bootstrap, gamma, huber_delta, delta_q, head_bias_grad):
+def _huber_td_gradient(q, target_q, actions, rewards, bootstrap, gamma, huber_delta,
+                       delta_q, head_bias_grad):
     """dLoss/dQ of the mean Huber loss of the TD errors into ``delta_q`` (nonzero only at the
     taken action), and its column sums (the head's bias gradient); returns the loss.
     y = r + gamma * bootstrap * max_a' Q_target(s', a'); the Huber loss's derivative is the TD
@@ -331,7 +337,7 @@ class TDUpdate:
         self.target_q = torch.zeros(B, A)
         self.delta_q = torch.zeros(B, A)
         self.deltas = [torch.zeros(B, H) for _ in range(config.num_hidden_layers)]
-        self.grad_norm = 0.0
+        self.grad_norm = 0.0  # of the last update's gradient, before clipping
         # numpy views of the same memory, for the numba kernels.
         self._np = {
             "q": self.q.numpy(), "target_q": self.target_q.numpy(), "delta_q": self.delta_q.numpy(),
@@ -350,7 +356,7 @@ class TDUpdate:
         torch.addmm(head_b, head_input, head_w.t(), out=q)
 
     def __call__(self, batch: dict[str, torch.Tensor]) -> float:
-        """One update; returns the gradient's norm before clipping."""
+        """One update; returns the batch's mean Huber loss (before the step)."""
         # Adam's moments of rarely-active weights decay into subnormal floats, which cost the
         # CPU ~10x per operation; flush them to zero during the update (this thread only, and
         # restored after, so nothing else in the process sees the switch).
@@ -371,16 +377,17 @@ class TDUpdate:
         self._forward(self.online, obs, self.acts, self.head_input, self.q)
         *hidden_w, (head_w, _) = self.online
         *hidden_g, (head_gw, head_gb) = self.grads
+        ws = self._np
         loss = _huber_td_gradient(
-            self._np["q"], self._np["target_q"], batch["actions"].numpy(), batch["rewards"].numpy(),
-            batch["bootstrap"].numpy(), cfg.gamma, cfg.huber_delta, self._np["delta_q"], self._np["head_gb"])
+            ws["q"], ws["target_q"], batch["actions"].numpy(), batch["rewards"].numpy(),
+            batch["bootstrap"].numpy(), cfg.gamma, cfg.huber_delta, ws["delta_q"], ws["head_gb"])
 
         # Backward through the head, then each hidden layer (last to first).
         torch.mm(self.delta_q.t(), self.head_input, out=head_gw)
         delta = torch.mm(self.delta_q, head_w[:, :cfg.hidden_size], out=self.deltas[-1])
         inputs = [obs[:, :NUM_DISTANCES]] + self.acts[:-1]
         for layer in reversed(range(len(hidden_w))):
-            _relu_backward(self._np["deltas"][layer], self._np["acts"][layer], self._np["hidden_gb"][layer])
+            _relu_backward(ws["deltas"][layer], ws["acts"][layer], ws["hidden_gb"][layer])
             torch.mm(delta.t(), inputs[layer], out=hidden_g[layer][0])
             if layer > 0:  # the distances need no gradient
                 delta = torch.mm(delta, hidden_w[layer][0], out=self.deltas[layer - 1])
@@ -527,7 +534,8 @@ class DQNLearner:
             return int(self.rng.integers(self.num_actions))
         return self.greedy(observation)
 
-    def observe(self, observation, action: int, reward: float, next_observation, terminated: bool) -> None:
+    def observe(self, observation, action: int, reward: float, next_observation,
+                terminated: bool) -> None:
         cfg = self.config
         self.buffer.add(observation, action, reward, next_observation, terminated)
         self.steps += 1
@@ -574,7 +582,7 @@ class DQNLearner:
             "rng": _rng_state_to_tensor(self.rng),
             "steps": self.steps, "last_loss": self.last_loss, "grad_norm": self.update.grad_norm,
             "target_syncs": self.target_syncs, "episodes": self.episodes,
-            "buffer_size": b.size, "buffer_position": b.position,
+            "buffer_capacity": b.capacity, "buffer_size": b.size, "buffer_position": b.position,
         }
         state["buffer_transitions"] = torch.from_numpy(b.transitions[: b.size].copy())
         return state
@@ -585,12 +593,15 @@ class DQNLearner:
             if tuple(state[key].shape) != tuple(expected):
                 raise ValueError(
                     f"checkpoint {key!r} has shape {tuple(state[key].shape)}, this learner's "
-                    f"network needs {tuple(expected)} (check hidden_size / num_hidden_layers)"
+                    f"network needs {tuple(expected)} (check algorithm.hidden_size, "
+                    f"algorithm.num_hidden_layers and num_actions)"
                 )
+        if int(state["buffer_capacity"]) != self.buffer.capacity:
+            raise ValueError(
+                f"checkpoint replay buffer has capacity {int(state['buffer_capacity'])}, "
+                f"algorithm.buffer_size is {self.buffer.capacity}"
+            )
         size = int(state["buffer_size"])
-        if size > self.buffer.capacity:
-            raise ValueError(f"checkpoint replay buffer holds {size} transitions, "
-                             f"learner.buffer_size is {self.buffer.capacity}")
         # In-place copies: the numpy views used by acting and Adam stay valid.
         with torch.no_grad():
             self.network.flat.copy_(state["network"])

@@ -14,9 +14,10 @@ naive Q(lambda)). An update that would make a weight non-finite is rolled back, 
 
 Sparsity: phi(s) has a few dozen active RBF features or 11 FSR features, so the learner only
 ever touches those weights. The trace is a list of (weight index, value) pairs kept sorted by
-index; one sequential pass merges the decayed trace with phi(s, a), drops entries that decayed
-below ``trace_cutoff`` and applies the update, so a step costs O(trace length + active
-features), never O(13829 * 11), and walks the weights in memory order.
+index; one sequential pass merges the decayed trace with phi(s, a), drops old entries that
+decayed to ``trace_cutoff`` (their remaining effect is below cutoff / (1 - gamma * lambda) of
+one update) and applies the update, so a step costs O(trace length + active features), never
+O(13829 * 11), and walks the weights in memory order.
 """
 
 from __future__ import annotations
@@ -50,8 +51,8 @@ class LinearQConfig:
     """Boyan decay constant N0: the rate halves after about N0 ** (1/1.1) episodes (RLPy: 753)."""
     alpha_decay: str = "boyan"
     """boyan: Boyan decay / ||phi(s)||_1; boyan_const: without the L1 division; const: alpha_0."""
-    trace_cutoff: float = 1e-6
-    """Trace entries that decay below this are dropped (RLPy keeps them); keeps traces short."""
+    trace_cutoff: float = 1e-4
+    """Trace entries that decay to this or below are dropped (RLPy keeps them): short traces."""
 
     def __post_init__(self) -> None:
         def fail(key: str, allowed: str) -> None:
@@ -227,7 +228,7 @@ class LinearQLearner:
         i * num_actions + a, value), sorted by index."""
         row, n = self._trace_row, self._trace_count
         return {
-            "theta": self.theta.copy(),
+            "theta": self._theta.reshape(self._num_features, self.num_actions).T.copy(),
             "episode": np.int64(self._episode),
             "episode_open": np.bool_(self._episode_open),
             "updates": np.int64(self._updates),
@@ -280,7 +281,8 @@ class LinearQLearner:
 
     @property
     def theta(self) -> np.ndarray:
-        """Weights as a (num_actions, num_features) view: row a is theta_a."""
+        """Weights as a writable (num_actions, num_features) view: row a is theta_a."""
+        self._q_key = b""  # the caller may write to it: drop the Q values kept for act()
         return self._theta.reshape(self._num_features, self.num_actions).T
 
     @property
@@ -332,6 +334,7 @@ class LinearQLearner:
         self._trace_backup = np.empty(size)
 
 
+# What one learning step did (returned by _learn).
 _UPDATED, _ROLLED_BACK, _SKIPPED = 0, 1, 2
 
 
@@ -379,8 +382,8 @@ def _learn(theta, action, reward, gamma, terminated, s_index, s_value, s_count,
     step = (rate / l1 if divide_by_l1 else rate) * (target - q_sa)
     apply = l1 > 0.0 and np.isfinite(step)  # RLPy skips the update without active features
 
-    # One pass in index order: e <- min(gamma * lambda * e + phi(s, a), 1), entries below the
-    # cutoff dropped, and theta <- theta + alpha * delta * e on the merged entries.
+    # One pass in index order: e <- min(gamma * lambda * e + phi(s, a), 1), old entries that
+    # decayed to the cutoff dropped, and theta <- theta + alpha * delta * e on what remains.
     old_index, old_value = trace_index[row], trace_value[row]
     new_index, new_value = trace_index[1 - row], trace_value[1 - row]
     end = np.iinfo(np.int64).max
@@ -392,6 +395,8 @@ def _learn(theta, action, reward, gamma, terminated, s_index, s_value, s_count,
         if f_old < f_new:
             f, e = f_old, old_value[i] * trace_decay
             i += 1
+            if e <= trace_cutoff:
+                continue
         elif f_new < f_old:
             f, e = f_new, min(s_value[j], 1.0)
             j += 1
@@ -399,8 +404,6 @@ def _learn(theta, action, reward, gamma, terminated, s_index, s_value, s_count,
             f, e = f_old, min(old_value[i] * trace_decay + s_value[j], 1.0)
             i += 1
             j += 1
-        if e <= trace_cutoff:
-            continue
         new_index[m] = f
         new_value[m] = e
         if apply:
@@ -410,13 +413,13 @@ def _learn(theta, action, reward, gamma, terminated, s_index, s_value, s_count,
         m += 1
 
     # All or nothing: a non-finite weight rolls the whole update back.
-    status = 0
+    status = _UPDATED
     if not apply:
-        status = 2 if l1 == 0.0 else 1
+        status = _SKIPPED if l1 == 0.0 else _ROLLED_BACK
     elif not finite:
         for k in range(m):
             theta[new_index[k]] = backup[k]
-        status = 1
+        status = _ROLLED_BACK
     best, ties = _q_values(theta, n_index, n_value, n_count, q[1])
     return m, status, best, ties
 

@@ -65,7 +65,7 @@ def build_report(cfg: DictConfig) -> Report:
     figure = None
     if curves:
         subtitle = (f"scale {header.scale}: {header.budget:,} steps, mean of runs +/- SEM; "
-                    "fastest = first to reach the threshold")
+                    "fastest: first to reach the threshold, then lowest L_R")
         figure = plot_curves(curves, header.threshold, header.max_reward, str(cfg.report.figure_title),
                              subtitle, out_dir / f"{cfg.report.figure}.png")
     report = Report(str(cfg.name), tables, figure, sum(len(c.results) for c in cells.values()))
