@@ -45,7 +45,7 @@ class MediatedInteractionEnv(gymnasium.Env):
     | scenario   | the paper's name                          | target centre                                    | tool               |
     |------------|-------------------------------------------|--------------------------------------------------|--------------------|
     | `"source"` | single-object interaction                 | in range, outside the goal area                  | all of it in range |
-    | `"target"` | mediated interaction (extension of reach) | in the annulus `mediated_min/max_distance` (11.5-13.5) | all of it in range |
+    | `"target"` | mediated interaction (extension of reach) | in the annulus `mediated_min/max_distance` (10.5-12.5) | all of it in range |
 
     The scenario only decides how `reset` samples a task; `reset(options={"task": task})` starts
     any valid task, so one environment serves a curriculum of source and target tasks.

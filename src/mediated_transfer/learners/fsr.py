@@ -13,13 +13,13 @@ bound them by 36 and 18, but the far ends are rare), so the defaults spend the 5
 
 from __future__ import annotations
 
-import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from numba import njit
 
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ._distance_ranges import check_numbers_and_ranges, check_positive_int
 
 NUM_BINARY = len(PICKING_LOCATIONS)
 BINARY_BINS = 2
@@ -41,20 +41,8 @@ class FSRConfig:
     """Upper edge of the |MiO| bins."""
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.type == "float" and (isinstance(value, bool) or not isinstance(value, (int, float))):
-                raise ValueError(f"representation.{f.name} must be a number, got {value!r}")
-        value = self.distance_bins
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"representation.distance_bins must be an integer >= 1, got {value!r}")
-        for kind in ("tool_target", "tool_origin"):
-            low, high = getattr(self, f"{kind}_low"), getattr(self, f"{kind}_high")
-            if not (math.isfinite(low) and math.isfinite(high) and low < high):
-                raise ValueError(
-                    f"representation.{kind}_low must be < representation.{kind}_high "
-                    f"(both finite), got {low!r} and {high!r}"
-                )
+        check_numbers_and_ranges(self)
+        check_positive_int(self, "distance_bins")
 
     def to_dict(self) -> dict:
         return asdict(self)

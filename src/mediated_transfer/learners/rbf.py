@@ -38,12 +38,13 @@ that fraction of max |theta| (the tests allow 3e-4).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from numba import njit
 
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ._distance_ranges import check_numbers_and_ranges, check_positive_int
 
 NUM_BINARY = len(PICKING_LOCATIONS)
 
@@ -72,23 +73,11 @@ class RBFConfig:
     """Drop Gaussians below this fraction of the state's largest (1e-5: 4.8 sigma; 0: dense)."""
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if f.type == "float" and (isinstance(value, bool) or not isinstance(value, (int, float))):
-                raise ValueError(f"representation.{f.name} must be a number, got {value!r}")
+        check_numbers_and_ranges(self)
         if not isinstance(self.normalize, bool):
             raise ValueError(f"representation.normalize must be true or false, got {self.normalize!r}")
-        for name in ("tool_target_bins", "tool_origin_bins"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"representation.{name} must be an integer >= 1, got {value!r}")
-        for kind in ("tool_target", "tool_origin"):
-            low, high = getattr(self, f"{kind}_low"), getattr(self, f"{kind}_high")
-            if not (math.isfinite(low) and math.isfinite(high) and low < high):
-                raise ValueError(
-                    f"representation.{kind}_low must be < representation.{kind}_high "
-                    f"(both finite), got {low!r} and {high!r}"
-                )
+        check_positive_int(self, "tool_target_bins")
+        check_positive_int(self, "tool_origin_bins")
         if not (math.isfinite(self.sigma) and self.sigma > 0):
             raise ValueError(f"representation.sigma must be > 0, got {self.sigma!r}")
         if not 0.0 <= self.cutoff < 1.0:
