@@ -176,6 +176,11 @@ def test_scales_match_the_paper_and_divide_the_budget(hydra_context):
         run_spec(_compose(f"scale={scale}"))
 
 
+def test_reduced_scales_report_beside_not_over_the_paper_scale(hydra_context):
+    dirs = {scale: _compose(f"scale={scale}").paths.reports_dir for scale in ("paper", "quick", "smoke")}
+    assert dirs == {"paper": "./reports", "quick": "./reports/quick", "smoke": "./reports/smoke"}
+
+
 # --- bad overrides -----------------------------------------------------------------------------
 
 

@@ -166,6 +166,6 @@ def test_command_line_builds_the_named_experiments(tmp_path, capsys):
     code = reporting_main(["experiment=table2_rbf", "scale=smoke", f"paths.root={tmp_path}", "tracking=none"])
     assert code == 0
     assert "table2_rbf: 5 runs" in capsys.readouterr().out
-    assert (tmp_path / "reports" / "table2_rbf.md").is_file()
+    assert (tmp_path / "reports" / "smoke" / "table2_rbf.md").is_file()
     with pytest.raises(SystemExit, match="allowed: table2_rbf, table3_fsr, table4_dnn"):
         reporting_main(["experiment=table9"])

@@ -9,6 +9,7 @@ reach it, are ordered by mean reward loss L_R.
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -69,7 +70,8 @@ def plot_curves(curves: list[Curve], threshold: float, max_reward: float, title:
     ax.set_ylabel("average reward per episode <R>")
     ax.set_ylim(-0.2, max_reward + 0.2)
     ax.set_xlim(left=0)
-    ax.set_title(f"{title}\n{subtitle}", fontsize=10)
+    # Wrapped so a long subtitle stays inside the figure instead of being cut at its edge.
+    ax.set_title("\n".join([title, *textwrap.wrap(subtitle, 90)]), fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
