@@ -1,0 +1,116 @@
+"""One learning run end to end: source phase, target phase, evaluation, the result files."""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mediated_transfer import run as run_module
+from mediated_transfer.env import WorldConfig, sample_tasks
+from mediated_transfer.env.mediated_env import MediatedInteractionEnv
+from mediated_transfer.learners.factory import make_learner
+from mediated_transfer.results import CURVE_FILE, RESULT_FILE, RunResult
+from mediated_transfer.run import RunSpec, evaluate, execute_run
+
+TINY = dict(budget=600, eval_points=3, eval_episodes=3, source_pool_size=200)
+
+
+@pytest.mark.parametrize("algorithm, representation", [("linear_q", "rbf"), ("linear_q", "fsr"), ("dqn", "network")])
+def test_a_tiny_run_of_each_learner_writes_a_complete_result(tmp_path, algorithm, representation):
+    params = {"learning_starts": 100, "buffer_size": 1000} if algorithm == "dqn" else {}
+    spec = RunSpec(algorithm=algorithm, representation=representation, strategy="regular", n_source=3,
+                   seed=1, cache_dir=str(tmp_path / "cache"), algorithm_params=params, **TINY)
+    result = execute_run(spec)
+    result.write(tmp_path / "run")
+
+    back = RunResult.read(tmp_path / "run")
+    assert back == result
+    assert back.steps == [200, 400, 600]
+    assert len(back.mean_reward) == len(back.success_rate) == 3
+    assert all(0.0 <= r <= 10.0 for r in back.mean_reward)
+    assert back.reward_loss == pytest.approx(sum(10.0 - r for r in back.mean_reward))
+    assert back.learning_steps_per_s > 0 and back.wall_time_s > 0
+    assert 0 <= back.source_tasks_solved <= 3
+    # The source phase ends exactly when all of C has been solved.
+    assert (back.source_phase_end is not None) == (back.source_tasks_solved == 3)
+    with open(tmp_path / "run" / CURVE_FILE) as fh:
+        rows = list(csv.DictReader(fh))
+    assert [int(r["step"]) for r in rows] == back.steps
+    assert json.loads((tmp_path / "run" / RESULT_FILE).read_text())["algorithm"] == algorithm
+
+
+def test_source_episodes_are_learning_steps_of_the_budget(tmp_path):
+    spec = RunSpec(algorithm="linear_q", representation="fsr", strategy="scaffolded", n_source=5,
+                   seed=0, cache_dir=str(tmp_path), **{**TINY, "budget": 3000})
+    result = execute_run(spec)
+    # Every learning step is one learner update, source and target episodes alike.
+    assert result.learner_stats["updates"] == 3000
+    # Source tasks (target within reach) are easy: the phase ends within this budget.
+    assert result.source_tasks_solved == 5 and 0 < result.source_phase_end < 3000
+
+
+def test_same_spec_same_curve():
+    spec = RunSpec(algorithm="linear_q", representation="rbf", strategy="regular", n_source=2, seed=7, **TINY)
+    first, second = execute_run(spec), execute_run(spec)
+    assert first.mean_reward == second.mean_reward
+    assert first.source_phase_end == second.source_phase_end
+    assert first.learner_stats == second.learner_stats
+
+
+def test_evaluation_leaves_the_learner_unchanged():
+    world = WorldConfig()
+    learner = make_learner("linear_q", "fsr", {"epsilon": 0.5}, world=world, seed=3)
+    env = MediatedInteractionEnv("target", world)
+    obs, _ = env.reset(seed=0)
+    for _ in range(300):  # some learning, so the greedy policy is not trivial
+        action = learner.act(obs)
+        next_obs, reward, terminated, truncated, _ = env.step(action)
+        learner.observe(obs, action, reward, next_obs, terminated)
+        obs = next_obs
+        if terminated or truncated:
+            learner.end_episode()
+            obs, _ = env.reset()
+    before = {k: np.array(v, copy=True) for k, v in learner.state_dict().items()}
+    tasks = sample_tasks("target", 4, np.random.default_rng(0), world)
+    eval_env = MediatedInteractionEnv("target", world)
+    first = evaluate(learner, eval_env, tasks, seed=11)
+    assert evaluate(learner, eval_env, tasks, seed=11) == first
+    after = learner.state_dict()
+    assert before.keys() == after.keys()
+    for key in before:
+        np.testing.assert_array_equal(before[key], np.asarray(after[key]), err_msg=key)
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"n_source": 500, "strategy": "regular"}, "exceeds source_pool_size=200"),
+    ({"budget": 601}, "not divisible into eval_points=3"),
+    ({"strategy": "curriculum", "n_source": 3}, "allowed: none, regular, scaffolded"),
+    ({"strategy": "none", "n_source": 15}, "'none' needs n_source=0"),
+    ({"strategy": "regular", "n_source": 0}, "need n_source >= 1"),
+    ({"algorithm": "dqn", "representation": "rbf"}, "allowed: network"),
+    ({"algorithm": "sarsa"}, "allowed: linear_q, dqn"),
+    ({"algorithm_params": {"gamma": 1.5}}, "gamma"),
+    ({"algorithm_params": {"lamda": 0.5}}, "unknown key(s) lamda"),
+])
+def test_bad_input_fails_before_any_work(monkeypatch, changes, message):
+    def no_work(*args, **kwargs):
+        raise AssertionError("work started before the input was checked")
+
+    monkeypatch.setattr(run_module, "source_task_set", no_work)
+    monkeypatch.setattr(run_module, "MediatedInteractionEnv", no_work)
+    spec = replace(RunSpec(**TINY), **changes)
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        execute_run(spec)
+
+
+def test_spec_from_dict_names_unknown_keys():
+    with pytest.raises(ValueError, match="unknown run keys"):
+        run_module.spec_from_dict({"budgett": 10})
+    with pytest.raises(ValueError, match="unknown env keys"):
+        run_module.spec_from_dict({"world": {"goal_radiuss": 2.0}})
+    spec = run_module.spec_from_dict({"world": {"goal_radius": 3.0}, "seed": 4})
+    assert spec.world.goal_radius == 3.0 and spec.seed == 4
