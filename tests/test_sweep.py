@@ -79,8 +79,8 @@ def test_experiment_runs_end_to_end_and_is_found_in_mlflow(root, source_cache, e
     assert reporting_main([f"experiment={experiment}", *common]) == 0
     figure = {"table2_rbf": "figure4_rbf", "table3_fsr": "figure5_fsr", "table4_dnn": "figure3_dnn"}[experiment]
     for name in (f"{experiment}.md", f"{experiment}.csv", f"{experiment}.tex", f"{figure}.png"):
-        assert (root / "reports" / name).stat().st_size > 0
-    assert f"| {SEEDS}/{SEEDS} |" in (root / "reports" / f"{experiment}.md").read_text()
+        assert (root / "reports" / "smoke" / name).stat().st_size > 0
+    assert f"| {SEEDS}/{SEEDS} |" in (root / "reports" / "smoke" / f"{experiment}.md").read_text()
 
     settings = _settings(root)
     runs = tracking.find_runs(settings, experiment, f"tags.kind = 'run' and tags.sweep = '{experiment}/smoke'")
