@@ -114,3 +114,15 @@ def test_spec_from_dict_names_unknown_keys():
         run_module.spec_from_dict({"world": {"goal_radiuss": 2.0}})
     spec = run_module.spec_from_dict({"world": {"goal_radius": 3.0}, "seed": 4})
     assert spec.world.goal_radius == 3.0 and spec.seed == 4
+
+
+def test_bench_command_accepts_no_parts_and_refuses_unknown_ones(monkeypatch):
+    from mediated_transfer.bench import __main__ as bench
+
+    ran = []
+    monkeypatch.setattr(bench.importlib, "import_module",
+                        lambda name: type("M", (), {"run": staticmethod(lambda steps: ran.append((name, steps)))}))
+    assert bench.main([]) == 0
+    assert [name for name, _ in ran] == list(bench.PARTS.values())
+    with pytest.raises(SystemExit):
+        bench.main(["gpu"])

@@ -24,13 +24,17 @@ DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000}
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m mediated_transfer.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("parts", nargs="*", default=list(PARTS), choices=list(PARTS),
-                        help="which benchmarks to run (default: all)")
+    # Checked below, not with `choices`: Python 3.11's argparse refuses an empty list there.
+    parser.add_argument("parts", nargs="*", metavar="PART",
+                        help=f"which benchmarks to run: {', '.join(PARTS)} (default: all)")
     parser.add_argument("--steps", type=int, default=None, help="steps per measurement")
     parser.add_argument("--json", default=None, help="also write the results to this JSON file")
     args = parser.parse_args(argv)
+    unknown = [p for p in args.parts if p not in PARTS]
+    if unknown:
+        parser.error(f"unknown benchmark(s) {', '.join(unknown)}; allowed: {', '.join(PARTS)}")
     results = {}
-    for part in args.parts:
+    for part in args.parts or list(PARTS):
         print(f"== {part} ==", flush=True)
         module = importlib.import_module(PARTS[part])
         results[part] = module.run(args.steps or DEFAULT_STEPS[part])
