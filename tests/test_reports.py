@@ -124,6 +124,15 @@ def test_runs_of_another_learner_in_the_sweep_folder_are_refused(tmp_path):
         build_report(cfg)
 
 
+def test_runs_of_another_evaluation_schedule_are_refused(tmp_path):
+    # The table header states the scale's evaluation points; runs with others must not mix in.
+    cfg = compose_experiment(tmp_path, "tracking=none", "scale.budget=300", "scale.eval_points=3")
+    synthetic_result("none", 0, 0, (1.0, 2.0, 3.0), (100, 200, 300)).write(Path(cfg.paths.sweep_dir) / "none_0/seed=0")
+    synthetic_result("none", 0, 1, (1.0, 2.0), (150, 300)).write(Path(cfg.paths.sweep_dir) / "none_0/seed=1")
+    with pytest.raises(ValueError, match="2 evaluation points, but this table expects eval_points=3"):
+        build_report(cfg)
+
+
 def test_variants_in_deeper_folders_are_not_part_of_the_table(tmp_path):
     sweep = tmp_path / "sweep"
     write_sweep(sweep, {("none", 0): [[1.0, 2.0]]})

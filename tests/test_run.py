@@ -53,12 +53,45 @@ def test_source_episodes_are_learning_steps_of_the_budget(tmp_path):
     assert result.source_tasks_solved == 5 and 0 < result.source_phase_end < 3000
 
 
-def test_same_spec_same_curve():
-    spec = RunSpec(algorithm="linear_q", representation="rbf", strategy="regular", n_source=2, seed=7, **TINY)
+@pytest.mark.parametrize("algorithm, representation, params, n_source, budget", [
+    ("linear_q", "fsr", {}, 5, 3000),
+    ("dqn", "network", {"learning_starts": 200, "buffer_size": 2000, "epsilon_decay_steps": 1000}, 2, 6000),
+])
+def test_same_spec_same_run(algorithm, representation, params, n_source, budget):
+    # Long enough that the source phase ends and episodes end early on success, so exploration,
+    # the strategy's choices and the physics all shape what is compared.
+    spec = RunSpec(algorithm=algorithm, representation=representation, strategy="scaffolded",
+                   n_source=n_source, seed=7, algorithm_params=params, **{**TINY, "budget": budget})
     first, second = execute_run(spec), execute_run(spec)
+    assert first.source_phase_end is not None
     assert first.mean_reward == second.mean_reward
     assert first.source_phase_end == second.source_phase_end
     assert first.learner_stats == second.learner_stats
+    other = execute_run(replace(spec, seed=8))
+    assert (other.source_phase_end, other.learner_stats) != (first.source_phase_end, first.learner_stats)
+
+
+def test_evaluation_settings_do_not_change_what_is_learned():
+    spec = RunSpec(algorithm="linear_q", representation="fsr", strategy="regular", n_source=5, seed=2,
+                   **{**TINY, "budget": 3000})
+    sparse = execute_run(spec)
+    dense = execute_run(replace(spec, eval_points=6, eval_episodes=5))
+    assert sparse.source_phase_end == dense.source_phase_end is not None
+    assert sparse.learner_stats == dense.learner_stats
+
+
+def test_every_strategy_of_a_seed_is_evaluated_on_the_same_target_tasks(monkeypatch):
+    seen = {}
+
+    def recording_evaluate(learner, env, tasks, seed):
+        seen.setdefault(current, []).append(([t.coordinates.tolist() for t in tasks], seed))
+        return 0.0, 0.0
+
+    monkeypatch.setattr(run_module, "evaluate", recording_evaluate)
+    for current, (strategy, n) in {"none": ("none", 0), "scaffolded": ("scaffolded", 3)}.items():
+        execute_run(RunSpec(strategy=strategy, n_source=n, seed=5, representation="fsr", **TINY))
+    assert seen["none"] == seen["scaffolded"]
+    assert len(seen["none"]) == 3 and len(seen["none"][0][0]) == TINY["eval_episodes"]
 
 
 def test_evaluation_leaves_the_learner_unchanged():

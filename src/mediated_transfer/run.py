@@ -28,8 +28,9 @@ from .results import RunResult
 from .transfer.source_tasks import sensor_vectors, source_task_set
 from .transfer.strategies import STRATEGIES, make_strategy
 
-# Independent random streams of one run, all derived from its seed.
-_ENV_STREAM, _STRATEGY_STREAM, _EVAL_TASK_STREAM, _EVAL_NOISE_STREAM = 1, 2, 3, 4
+# Independent random streams of one run, all derived from its seed (never the seed itself:
+# default_rng(seed) is also the source pool's stream when seed == source_set_seed).
+_ENV_STREAM, _STRATEGY_STREAM, _EVAL_TASK_STREAM, _EVAL_NOISE_STREAM, _LEARNER_STREAM = 1, 2, 3, 4, 5
 
 
 def _stream_seed(seed: int, stream: int) -> int:
@@ -124,7 +125,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     spec.validate()
     world = spec.world
     learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                           spec.representation_params, world=world, seed=spec.seed)
+                           spec.representation_params, world=world,
+                           seed=_stream_seed(spec.seed, _LEARNER_STREAM))
     source_tasks = source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
                                    seed=spec.source_set_seed, cache_dir=spec.cache_dir)
     strategy = make_strategy(spec.strategy, source_tasks, sensor_vectors(source_tasks, world),

@@ -40,7 +40,8 @@ def build_report(cfg: DictConfig) -> Report:
         raise ValueError(f"the config '{cfg.name}' has no report section; build reports of an "
                          "experiment, e.g. experiment=table2_rbf")
     sweep_dir = Path(cfg.paths.sweep_dir)
-    cells = collect_sweep(sweep_dir, cfg.algorithm.name, cfg.representation.name, int(cfg.scale.budget))
+    cells = collect_sweep(sweep_dir, cfg.algorithm.name, cfg.representation.name, int(cfg.scale.budget),
+                          int(cfg.scale.eval_points))
     if not cells:
         raise FileNotFoundError(
             f"no finished runs in {sweep_dir}; run the sweep first: "

@@ -39,12 +39,14 @@ class CellRuns:
 
 
 def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
-                  representation: str | None = None, budget: int | None = None) -> dict[str, CellRuns]:
+                  representation: str | None = None, budget: int | None = None,
+                  eval_points: int | None = None) -> dict[str, CellRuns]:
     """The finished runs under ``sweep_dir`` by cell name, runs sorted by seed.
 
-    With ``algorithm``/``representation``/``budget`` given, a run of another learner or budget
-    in the folder is an error (it would silently mix into the table otherwise); so is a run
-    whose curve has other evaluation steps than the rest of its cell.
+    With ``algorithm``/``representation``/``budget``/``eval_points`` given, a run of another
+    learner, budget or evaluation schedule in the folder is an error (it would silently mix into
+    the table, whose header states the schedule, otherwise); so is a run whose curve has other
+    evaluation steps than the rest of its cell.
     """
     sweep_dir = Path(sweep_dir)
     cells: dict[str, CellRuns] = {}
@@ -56,6 +58,9 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             if wanted is not None and getattr(result, key) != wanted:
                 raise ValueError(f"{folder}: {key}={getattr(result, key)!r}, but this table expects "
                                  f"{key}={wanted!r}; the folder belongs to another sweep")
+        if eval_points is not None and len(result.steps) != eval_points:
+            raise ValueError(f"{folder}: {len(result.steps)} evaluation points, but this table "
+                             f"expects eval_points={eval_points}; the folder belongs to another sweep")
         cell_name = f"{result.strategy}_{result.n_source}"
         if folder.parent.name != cell_name or folder.name != f"seed={result.seed}":
             raise ValueError(f"{folder} holds the run {cell_name} seed={result.seed}: "
