@@ -9,7 +9,6 @@ import dataclasses
 import importlib
 import inspect
 import textwrap
-from pathlib import Path
 
 import pytest
 from hydra import compose, initialize_config_dir

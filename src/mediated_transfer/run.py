@@ -13,17 +13,17 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, fields, replace
-from pathlib import Path
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 import numpy as np
 
 from . import metrics
+from .configs import config_from_mapping
 from .env import WorldConfig, sample_tasks
 from .env.mediated_env import MediatedInteractionEnv
 from .learners.base import Learner
-from .learners.factory import ALGORITHMS, make_learner, validate_learner_choice
+from .learners.factory import make_learner, validate_learner_choice
 from .results import RunResult
 from .transfer.source_tasks import sensor_vectors, source_task_set
 from .transfer.strategies import STRATEGIES, make_strategy
@@ -203,26 +203,11 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
 
 def spec_from_dict(values: dict[str, Any]) -> RunSpec:
     """A RunSpec from plain values (e.g. a resolved Hydra config); unknown keys are errors."""
-    allowed = {f.name for f in fields(RunSpec)}
-    unknown = sorted(set(values) - allowed)
-    if unknown:
-        raise ValueError(f"unknown run keys {unknown}; allowed: {', '.join(sorted(allowed))}")
     values = dict(values)
     world = values.pop("world", None)
-    spec = RunSpec(**values)
+    spec = config_from_mapping(RunSpec, values, "run")
     if world is not None:
-        world = world if isinstance(world, WorldConfig) else _world_from_dict(world)
+        if not isinstance(world, WorldConfig):
+            world = config_from_mapping(WorldConfig, world, "env")
         spec = replace(spec, world=world)
     return spec
-
-
-def _world_from_dict(values: dict[str, Any]) -> WorldConfig:
-    allowed = {f.name for f in fields(WorldConfig)}
-    unknown = sorted(set(values) - allowed)
-    if unknown:
-        raise ValueError(f"unknown env keys {unknown}; allowed: {', '.join(sorted(allowed))}")
-    return WorldConfig(**values)
-
-
-def result_exists(folder: str | Path) -> bool:
-    return RunResult.exists(folder)

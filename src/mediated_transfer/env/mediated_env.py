@@ -5,12 +5,12 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Mapping
-from dataclasses import fields
 
 import gymnasium
 import numpy as np
 from gymnasium import spaces
 
+from ..configs import config_from_mapping
 from .config import WorldConfig
 from .task import NUM_DISTANCES, O, PICKING_LOCATIONS, SCENARIOS, T, Task, sample_task
 from .world import World
@@ -385,14 +385,7 @@ def _as_config(config) -> WorldConfig:
     if isinstance(config, WorldConfig):
         return config
     if isinstance(config, Mapping):
-        allowed = [f.name for f in fields(WorldConfig)]
-        unknown = sorted(set(config) - set(allowed))
-        if unknown:
-            raise ValueError(
-                f"unknown env config key(s) {', '.join(map(str, unknown))}; "
-                f"allowed: {', '.join(allowed)}"
-            )
-        return WorldConfig(**config)
+        return config_from_mapping(WorldConfig, config, "env")
     raise ValueError(f"config must be a WorldConfig, a mapping or None, got {type(config).__name__}")
 
 

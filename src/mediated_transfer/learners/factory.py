@@ -7,9 +7,9 @@ that name the allowed values.
 
 from __future__ import annotations
 
-from dataclasses import fields
 from typing import Any, Mapping
 
+from ..configs import config_from_mapping
 from ..env.config import WorldConfig
 from ..env.task import PICKING_LOCATIONS
 from .base import Learner
@@ -30,15 +30,8 @@ _REPRESENTATIONS = {"rbf": RBFRepresentation, "fsr": FSRRepresentation}
 
 
 def build_config(cls, params: Mapping[str, Any], group: str):
-    """``cls(**params)`` with an error naming the group, the unknown keys and the allowed ones."""
-    params = {k: v for k, v in params.items() if k != "name"}
-    allowed = [f.name for f in fields(cls)]
-    unknown = sorted(set(params) - set(allowed))
-    if unknown:
-        raise ValueError(
-            f"{group}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(allowed)}"
-        )
-    return cls(**params)
+    """The group's config object; ``name`` (the option's name in its Hydra group) is not a key."""
+    return config_from_mapping(cls, {k: v for k, v in params.items() if k != "name"}, group)
 
 
 def validate_learner_choice(
