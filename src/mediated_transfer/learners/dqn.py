@@ -35,6 +35,7 @@ import torch.nn.functional as F
 from torch import nn
 
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
+from .rng_state import restore_rng_state, rng_state_words
 
 NUM_BINARY = OBSERVATION_SIZE - NUM_DISTANCES
 
@@ -473,24 +474,6 @@ class GreedyPolicy:
 # --------------------------------------------------------------------------------------------
 # Learner
 # --------------------------------------------------------------------------------------------
-def _rng_state_to_tensor(rng: np.random.Generator) -> torch.Tensor:
-    """PCG64 state (two 128-bit integers and a cached 32-bit half) as an int64 tensor of 32-bit
-    words, so that a checkpoint holds tensors only."""
-    s = rng.bit_generator.state
-    words = [(s["state"][k] >> (32 * j)) & 0xFFFFFFFF for k in ("state", "inc") for j in range(4)]
-    return torch.tensor(words + [s["has_uint32"], s["uinteger"]], dtype=torch.int64)
-
-
-def _rng_state_from_tensor(rng: np.random.Generator, tensor: torch.Tensor) -> None:
-    words = [int(w) for w in tensor.tolist()]
-    number = lambda ws: sum(w << (32 * j) for j, w in enumerate(ws))  # noqa: E731
-    rng.bit_generator.state = {
-        "bit_generator": "PCG64",
-        "state": {"state": number(words[0:4]), "inc": number(words[4:8])},
-        "has_uint32": words[8], "uinteger": words[9],
-    }
-
-
 class DQNLearner:
     """Deep Q-learning with the paper's network, behind the ``Learner`` interface.
 
@@ -579,7 +562,7 @@ class DQNLearner:
             "adam_mean": self.update.adam_mean.clone(),
             "adam_sq_mean": self.update.adam_sq_mean.clone(),
             "adam_steps": self.update.adam_steps,
-            "rng": _rng_state_to_tensor(self.rng),
+            "rng": torch.tensor(rng_state_words(self.rng), dtype=torch.int64),
             "steps": self.steps, "last_loss": self.last_loss, "grad_norm": self.update.grad_norm,
             "target_syncs": self.target_syncs, "episodes": self.episodes,
             "buffer_capacity": b.capacity, "buffer_size": b.size, "buffer_position": b.position,
@@ -609,7 +592,7 @@ class DQNLearner:
         self.update.adam_mean.copy_(state["adam_mean"])
         self.update.adam_sq_mean.copy_(state["adam_sq_mean"])
         self.update.adam_steps = int(state["adam_steps"])
-        _rng_state_from_tensor(self.rng, state["rng"])
+        restore_rng_state(self.rng, state["rng"])
         self.steps = int(state["steps"])
         self.last_loss, self.update.grad_norm = float(state["last_loss"]), float(state["grad_norm"])
         self.target_syncs, self.episodes = int(state["target_syncs"]), int(state["episodes"])

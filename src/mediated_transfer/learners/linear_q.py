@@ -30,6 +30,8 @@ from typing import Any, Protocol
 import numpy as np
 from numba import njit
 
+from .rng_state import restore_rng_state, rng_state_words
+
 LEARNING_RATE_DECAYS = ("boyan", "boyan_const", "const")
 
 
@@ -236,7 +238,7 @@ class LinearQLearner:
             "rollbacks": np.int64(self._rollbacks),
             "trace_index": self._trace_index[row, :n].copy(),
             "trace_value": self._trace_value[row, :n].copy(),
-            "rng_state": _encode_rng(self._rng),
+            "rng_state": np.array(rng_state_words(self._rng), dtype=np.uint64),
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -258,7 +260,7 @@ class LinearQLearner:
         self._episode_open = bool(state["episode_open"])
         self._updates = int(state["updates"])
         self._rollbacks = int(state["rollbacks"])
-        self._rng = _decode_rng(state["rng_state"])
+        restore_rng_state(self._rng, state["rng_state"])
         n = len(trace_index)
         self._trace_count = 0
         if n > self._trace_index.shape[1]:
@@ -423,28 +425,3 @@ def _learn(theta, action, reward, gamma, terminated, s_index, s_value, s_count,
         status = _ROLLED_BACK
     best, ties = _q_values(theta, n_index, n_value, n_count, q[1])
     return m, status, best, ties
-
-
-def _encode_rng(rng: np.random.Generator) -> np.ndarray:
-    """The PCG64 state as plain uint64 words (no pickle): state and increment in 64-bit halves."""
-    st = rng.bit_generator.state
-    if st["bit_generator"] != "PCG64":
-        raise ValueError(f"only PCG64 generators can be saved, got {st['bit_generator']}")
-    mask = (1 << 64) - 1
-    s, inc = st["state"]["state"], st["state"]["inc"]
-    return np.array([s >> 64, s & mask, inc >> 64, inc & mask, st["has_uint32"], st["uinteger"]],
-                    dtype=np.uint64)
-
-
-def _decode_rng(words) -> np.random.Generator:
-    w = [int(x) for x in np.asarray(words, dtype=np.uint64)]
-    if len(w) != 6:
-        raise ValueError(f"checkpoint rng_state must hold 6 words, got {len(w)}")
-    bit_generator = np.random.PCG64()
-    bit_generator.state = {
-        "bit_generator": "PCG64",
-        "state": {"state": (w[0] << 64) | w[1], "inc": (w[2] << 64) | w[3]},
-        "has_uint32": w[4],
-        "uinteger": w[5],
-    }
-    return np.random.Generator(bit_generator)
