@@ -32,6 +32,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from . import tracking
+from .atomic import atomic_write_text
 from .results import RunResult
 
 if TYPE_CHECKING:
@@ -308,7 +309,7 @@ def prepare_sweep(config: DictConfig) -> list[list[str]] | None:
     sweep_dir.mkdir(parents=True, exist_ok=True)
     total = None if jobs is None else len(jobs)
     if total is not None:
-        _atomic_json(sweep_dir / PLAN_FILE, {"total": total, "started": time.time()})
+        atomic_write_text(sweep_dir / PLAN_FILE, json.dumps({"total": total, "started": time.time()}) + "\n")
     log.info("sweep %s: %s runs in %s", ", ".join(sorted(names)), total or "?", sweep_dir)
     return jobs
 
@@ -343,12 +344,6 @@ def _warm_source_task_cache(specs: Sequence[RunSpec]) -> None:
     for (world, pool_size, seed, cache_dir), n_sources in groups.items():
         if n_sources - {0}:
             precompute_source_task_sets(n_sources, world, pool_size, seed, cache_dir=cache_dir)
-
-
-def _atomic_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data) + "\n")
-    os.replace(tmp, path)
 
 
 # --- command line -----------------------------------------------------------------------------

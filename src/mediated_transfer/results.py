@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from .atomic import atomic_write_text
+
 RESULT_FILE = "result.json"
 CURVE_FILE = "curve.csv"
 
@@ -52,9 +54,9 @@ class RunResult:
         folder.mkdir(parents=True, exist_ok=True)
         lines = ["step,mean_reward,success_rate"]
         lines += [f"{s},{r!r},{p!r}" for s, r, p in zip(self.steps, self.mean_reward, self.success_rate)]
-        _atomic_write(folder / CURVE_FILE, "\n".join(lines) + "\n")
+        atomic_write_text(folder / CURVE_FILE, "\n".join(lines) + "\n")
         # result.json last: its presence marks the run as finished.
-        _atomic_write(folder / RESULT_FILE, json.dumps(asdict(self), indent=2, default=_plain) + "\n")
+        atomic_write_text(folder / RESULT_FILE, json.dumps(asdict(self), indent=2, default=_plain) + "\n")
         return folder / RESULT_FILE
 
     @classmethod
@@ -73,9 +75,3 @@ def _plain(value):
     if isinstance(value, np.ndarray):
         return value.tolist()
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)

@@ -24,8 +24,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
-import tempfile
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -33,6 +31,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from ..atomic import atomic_write
 from ..env.config import WorldConfig
 from ..env.task import OBSERVATION_SIZE, Task, sample_tasks
 
@@ -199,7 +198,9 @@ def _select_and_store(pool, sensors, n_source, seed, clustering, path) -> list[T
     )
     tasks = [pool[i] for i in chosen]
     if path is not None:
-        _write(path, np.array([t.coordinates for t in tasks]), chosen)
+        # Atomic: parallel workers may write the same set at once; a reader never sees half.
+        coordinates = np.array([t.coordinates for t in tasks])
+        atomic_write(path, lambda handle: np.savez(handle, coordinates=coordinates, pool_indices=chosen))
     return tasks
 
 
@@ -240,15 +241,3 @@ def _read(path: Path, n_source: int) -> list[Task] | None:
     return [Task.from_coordinates(t) for t in coordinates]
 
 
-def _write(path: Path, coordinates: np.ndarray, pool_indices: np.ndarray) -> None:
-    # A uniquely named temporary file in the same folder, then an atomic rename: parallel
-    # workers may write the same set at once, and a reader never sees half a file.
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            np.savez(handle, coordinates=coordinates, pool_indices=pool_indices)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
