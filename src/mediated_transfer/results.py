@@ -46,6 +46,9 @@ class RunResult:
     wall_time_s: float
     learning_steps_per_s: float
     learner_stats: dict[str, float] = field(default_factory=dict)
+    first_target_reward_step: int | None = None
+    """Learning step of the first rewarded target-task (training) episode: when the learner
+    discovered the mediated interaction. None: never within the budget."""
     config: dict[str, Any] = field(default_factory=dict)
     """The resolved config of the run."""
 

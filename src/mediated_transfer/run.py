@@ -144,6 +144,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     rewards: list[float] = []
     success: list[float] = []
     source_phase_end: int | None = None
+    first_target_reward: int | None = None
     step = 0
     env_seed: int | None = _stream_seed(spec.seed, _ENV_STREAM)
     learn_time = 0.0
@@ -161,6 +162,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
             learner.observe(obs, action, reward, next_obs, terminated)
             obs = next_obs
             step += 1
+            if reward > 0 and task is None and first_target_reward is None:
+                first_target_reward = step
             if step % eval_every == 0:
                 learn_time += time.perf_counter() - mark
                 r, p = evaluate(learner, eval_env, eval_tasks, eval_seed)
@@ -194,6 +197,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         reward_loss=metrics.reward_loss(rewards_arr, world.success_reward),
         time_to_threshold=metrics.time_to_threshold(steps, rewards_arr, spec.threshold),
         source_phase_end=source_phase_end,
+        first_target_reward_step=first_target_reward,
         source_tasks_solved=strategy.solved_count,
         wall_time_s=wall,
         learning_steps_per_s=spec.budget / learn_time if learn_time > 0 else math.inf,
