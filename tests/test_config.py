@@ -1,32 +1,21 @@
-"""conf/: every group option composes into a runnable config, the YAML defaults agree with the
-dataclasses they configure, each experiment's sweep covers exactly its table's rows, and bad
-overrides fail at once with a message naming the allowed values."""
+"""conf/: every group option composes into a runnable config, each experiment's sweep covers
+exactly its table's rows, any N_source works, and bad overrides fail at once with a one-line
+message naming the key and the allowed values."""
 
 from __future__ import annotations
 
-import ast
 import dataclasses
-import importlib
-import inspect
-import textwrap
 
 import pytest
 from hydra import compose, initialize_config_dir
-from hydra.errors import ConfigCompositionException, MissingConfigException
 from hydra.utils import get_class
 from omegaconf import OmegaConf
 
-from mediated_transfer.app import CONF_DIR, ConfigError, planned_jobs, quote_numeric_choices, run_spec
+from mediated_transfer.config import schema
+from mediated_transfer.config.compose import CONF_DIR, ConfigError, compose_config, prepare_overrides
+from mediated_transfer.config.spec import run_spec
 from mediated_transfer.reporting.paper import paper_rows
-
-# conf file -> the dataclass whose fields and defaults it spells out.
-DATACLASS_OF = {
-    "env/default": "mediated_transfer.env.config.WorldConfig",
-    "algorithm/linear_q": "mediated_transfer.learners.linear_q.LinearQConfig",
-    "algorithm/dqn": "mediated_transfer.learners.dqn.DQNConfig",
-    "representation/rbf": "mediated_transfer.learners.rbf.RBFConfig",
-    "representation/fsr": "mediated_transfer.learners.fsr.FSRConfig",
-}
+from mediated_transfer.sweep import planned_jobs
 # What an option needs beside it to form a valid run (the rest stays at the defaults).
 COMPANIONS = {
     "algorithm=dqn": ["representation=network"],
@@ -46,14 +35,16 @@ def hydra_context():
 
 
 def _compose(*overrides: str, hydra: bool = False):
-    return compose("config", overrides=quote_numeric_choices(overrides), return_hydra_config=hydra)
+    return compose("config", overrides=prepare_overrides(overrides), return_hydra_config=hydra)
 
 
 def _options() -> list[str]:
     out = []
     for group in sorted(p for p in CONF_DIR.iterdir() if p.is_dir() and p.name not in ("hydra", "experiment")):
         out += [f"{group.name}={option.stem}" for option in sorted(group.glob("*.yaml"))]
-    return out
+    for group, options in schema.PYTHON_OPTIONS.items():
+        out += [f"{group}={name}" for name in options]
+    return sorted(out)
 
 
 def _companions(option: str) -> list[str]:
@@ -152,20 +143,25 @@ def _seed(job: list[str]) -> int:
     return int(next(o.split("=", 1)[1] for o in job if o.startswith("seed=")))
 
 
-@pytest.mark.parametrize("name", sorted(DATACLASS_OF))
-def test_yaml_defaults_equal_the_dataclass_defaults(name):
-    cls = _import(DATACLASS_OF[name])
-    yaml = OmegaConf.to_container(OmegaConf.load(CONF_DIR / f"{name}.yaml"))
-    yaml.pop("name", None)
-    defaults = {f.name: _default(f) for f in dataclasses.fields(cls)}
-    assert yaml == defaults, (
-        f"conf/{name}.yaml is out of date with {cls.__name__}; its body should read:\n"
-        + dataclass_yaml(cls))
+@pytest.mark.parametrize("group, name, cls", [
+    (g, n, c) for g, options in schema.PYTHON_OPTIONS.items() for n, c in options.items()])
+def test_python_configured_options_compose_to_their_dataclass_defaults(hydra_context, group, name, cls):
+    # One place per default: the dataclass. The composed node holds exactly its fields and values.
+    companions = {"dqn": ["representation=network"], "network": ["algorithm=dqn"]}
+    node = _compose(f"{group}={name}", *companions.get(name, []))[group]
+    assert OmegaConf.get_type(node) is cls
+    assert OmegaConf.to_container(node) == dataclasses.asdict(cls())
 
 
-def test_network_representation_holds_no_keys_of_its_own():
-    # The DQN's architecture lives in algorithm/dqn.yaml; the factory refuses keys here.
-    assert OmegaConf.to_container(OmegaConf.load(CONF_DIR / "representation/network.yaml")) == {"name": "network"}
+def test_no_yaml_file_repeats_a_python_default():
+    for group in schema.PYTHON_OPTIONS:
+        assert not (CONF_DIR / group).exists(), f"conf/{group}/ would hold a second copy of the defaults"
+
+
+def test_network_representation_holds_no_keys_of_its_own(hydra_context):
+    # The DQN's architecture lives in algorithm (DQNConfig); the factory refuses keys here.
+    cfg = _compose("algorithm=dqn", "representation=network")
+    assert OmegaConf.to_container(cfg.representation) == {"name": "network"}
 
 
 def test_scales_match_the_paper_and_divide_the_budget(hydra_context):
@@ -184,21 +180,43 @@ def test_reduced_scales_report_beside_not_over_the_paper_scale(hydra_context):
 
 
 @pytest.mark.parametrize("override, allowed", [
-    ("n_source=7", ["0", "1", "15", "50", "100", "5000"]),
     ("algorithm=sarsa", ["linear_q", "dqn"]),
     ("scale=huge", ["paper", "quick", "smoke"]),
     ("cell=regular_7", ["none_0", "regular_50", "scaffolded_5000"]),
     ("experiment=table9", ["table2_rbf", "table3_fsr", "table4_dnn"]),
+    ("n_source=abc", ["0", "1", "15", "50", "100", "5000"]),
 ])
-def test_unknown_option_names_the_allowed_options(hydra_context, override, allowed):
-    with pytest.raises(MissingConfigException) as error:
-        _compose(override)
-    assert all(f"\t{a}\n" in str(error.value) for a in allowed)
+def test_unknown_option_is_one_line_naming_the_allowed_options(override, allowed):
+    with pytest.raises(ConfigError) as error:
+        compose_config([override])
+    message = str(error.value)
+    assert "\n" not in message and override.split("=")[0] in message
+    assert all(a in message.split("allowed: ")[1].split(", ") for a in allowed)
 
 
-def test_unknown_key_is_refused(hydra_context):
-    with pytest.raises(ConfigCompositionException, match="algorithm.no_such_key"):
-        _compose("algorithm.no_such_key=1")
+@pytest.mark.parametrize("override, message", [
+    ("+algoritm=dqn", "unknown key 'algoritm'; did you mean 'algorithm'?"),
+    ("+foo=1", "unknown key 'foo'; keys here: name, cell, seed"),
+    ("+scale.foo=1", "unknown key 'scale.foo'; keys here: name, budget"),
+    ("+algorithm.no_such_key=1", "unknown key 'algorithm.no_such_key'"),
+    ("algorithm.lamda_=0.5", "unknown key 'algorithm.lamda_'; did you mean 'algorithm.lambda_'?"),
+    ("env.goal_radius=abc", "env.goal_radius=abc: Value 'abc' of type 'str' could not be converted to Float"),
+    ("env.substeps=2.5", "env.substeps=2.5"),
+    ("env.max_episode_steps=2.5", "env.max_episode_steps=2.5"),
+    ("seed=abc", "seed=abc"),
+    ("threshold=abc", "threshold=abc"),
+])
+def test_wrong_keys_and_types_are_refused_while_composing_in_one_line(override, message):
+    with pytest.raises(ConfigError) as error:
+        compose_config([override])
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_any_non_negative_n_source_composes():
+    cfg = compose_config(["strategy=scaffolded", "n_source=7"])
+    assert (cfg.n_source, cfg.cell) == (7, "scaffolded_7")
+    assert run_spec(cfg).n_source == 7
+    assert compose_config(["strategy=regular", "n_source=15"]).n_source == 15  # a paper option
 
 
 @pytest.mark.parametrize("overrides, message", [
@@ -208,7 +226,8 @@ def test_unknown_key_is_refused(hydra_context):
     (["n_source=15"], "strategy"),
     (["scale.budget=201"], "eval_points"),
     (["env.goal_radius=20"], "goal_radius"),
-    (["+algorithm.no_such_key=1"], "no_such_key"),
+    (["algorithm.gamma=1.5"], r"algorithm.gamma must lie in \[0, 1\), got 1.5"),
+    (["seed=-1"], "seed must be >= 0"),
 ])
 def test_invalid_combination_fails_before_any_work(hydra_context, overrides, message):
     with pytest.raises(ConfigError, match=message):
@@ -226,48 +245,22 @@ def test_command_line_reports_an_invalid_combination_and_starts_nothing(tmp_path
     assert not list(tmp_path.iterdir())  # failed before the first folder was made
 
 
+def test_command_line_refuses_typos_and_bad_values_before_any_folder(tmp_path):
+    from .test_sweep import _run_cli
+
+    common = [f"paths.root={tmp_path}", "tracking=none", "scale=smoke"]
+    for bad, key in [("+algoritm=dqn", "algorithm"), ("+foo=1", "foo"), ("env.goal_radius=abc", "env.goal_radius"),
+                     ("algorithm.gamma=1.5", "algorithm.gamma")]:
+        with pytest.raises(SystemExit) as error:
+            _run_cli(bad, *common)
+        assert str(error.value).startswith("Invalid configuration: ") and key in str(error.value)
+        assert "\n" not in str(error.value)
+    with pytest.raises(SystemExit, match="env.goal_radius"):
+        _run_cli("-m", "experiment=table2_rbf", "env.goal_radius=abc", "hydra/launcher=basic", *common)
+    assert not list(tmp_path.iterdir())
+
+
 def test_numeric_group_choices_are_quoted_for_hydra():
-    groups = {"n_source"}
-    assert quote_numeric_choices(["n_source=15", "seed=3"], groups) == ["n_source='15'", "seed=3"]
-    assert quote_numeric_choices(["n_source=1,15"], groups) == ["n_source='1','15'"]
-    assert quote_numeric_choices(["n_source='15'", "scale.budget=10"], groups) == ["n_source='15'", "scale.budget=10"]
-
-
-# --- helpers -----------------------------------------------------------------------------------
-
-
-def _import(path: str):
-    module, name = path.rsplit(".", 1)
-    return getattr(importlib.import_module(module), name)
-
-
-def _default(field):
-    return field.default if field.default is not dataclasses.MISSING else field.default_factory()
-
-
-def dataclass_yaml(cls) -> str:
-    """The YAML body for ``cls``: each field's docstring as a comment, then key: default."""
-    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
-    body = tree.body[0].body
-    docs = {a.target.id: " ".join(b.value.value.split()) for a, b in zip(body, body[1:])
-            if isinstance(a, ast.AnnAssign) and isinstance(b, ast.Expr) and isinstance(b.value, ast.Constant)}
-    lines = []
-    for f in dataclasses.fields(cls):
-        lines += ["# " + line for line in textwrap.wrap(docs.get(f.name, ""), 96)]
-        lines.append(f"{f.name}: {OmegaConf.to_yaml({f.name: _default(f)}).split(': ', 1)[1].strip()}")
-    return "\n".join(lines) + "\n"
-
-
-def rewrite_yaml(name: str) -> None:
-    """Replace the body of conf/<name>.yaml by the dataclass's fields, keeping its header
-    (everything up to the first blank line)."""
-    path = CONF_DIR / f"{name}.yaml"
-    header = path.read_text().split("\n\n", 1)[0]
-    path.write_text(header + "\n\n" + dataclass_yaml(_import(DATACLASS_OF[name])))
-
-
-if __name__ == "__main__":
-    # python -m tests.test_config: bring the YAML files up to date after a dataclass changed.
-    for conf_name in DATACLASS_OF:
-        rewrite_yaml(conf_name)
-        print(f"wrote conf/{conf_name}.yaml")
+    assert prepare_overrides(["n_source=15", "seed=3"]) == ["n_source='15'", "seed=3"]
+    assert prepare_overrides(["n_source=1,15"]) == ["n_source='1','15'"]
+    assert prepare_overrides(["n_source='15'", "scale.budget=10"]) == ["n_source='15'", "scale.budget=10"]

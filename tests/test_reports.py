@@ -12,7 +12,7 @@ from hydra import compose, initialize_config_dir
 from PIL import Image
 
 from mediated_transfer import tracking
-from mediated_transfer.app import CONF_DIR
+from mediated_transfer.config.compose import CONF_DIR
 from mediated_transfer.metrics import summarise_runs
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.reporting.build import build_report

@@ -17,7 +17,8 @@ import pytest
 from hydra.core.global_hydra import GlobalHydra
 
 from mediated_transfer import tracking
-from mediated_transfer.app import CONF_DIR, ConfigError, cli, run_job
+from mediated_transfer.app import cli, run_job
+from mediated_transfer.config.compose import CONF_DIR, ConfigError
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.reporting.paper import paper_rows
 from mediated_transfer.results import RunResult
@@ -167,3 +168,33 @@ def test_submitit_local_launcher_runs_the_jobs(root, source_cache):
     assert list((sweep_dir / ".submitit").iterdir())  # the jobs went through submitit
     [run] = tracking.find_runs(_settings(root), "table2_rbf", "tags.kind = 'run'")
     assert run.data.tags["cell"] == "regular_1"
+
+
+def test_a_sweep_over_any_n_source_runs(root, source_cache):
+    _run_cli("-m", "strategy=regular,scaffolded", "n_source=7", "hydra/launcher=basic", "tracking=none",
+             *_common(root, source_cache))
+    sweep_dir = root / "multirun" / "linear_q_rbf" / "smoke"
+    assert set(_results(sweep_dir)) == {"regular_7/seed=0", "scaffolded_7/seed=0"}
+    result = RunResult.read(sweep_dir / "regular_7" / "seed=0")
+    assert (result.strategy, result.n_source) == ("regular", 7)
+
+
+def test_a_result_of_other_code_is_reported_stale_and_recomputed_on_request(root, source_cache, caplog):
+    args = ["seed=1", "tracking=none", *_common(root, source_cache)]
+    _run_cli(*args)
+    folder = root / "runs" / "linear_q_rbf" / "smoke" / "none_0" / "seed=1"
+    result = RunResult.read(folder)
+    assert result.stale() is None and result.results_format == 2
+    assert len(result.code["digest"]) == 16 and "commit" in result.code and "dirty" in result.code
+
+    stored = json.loads((folder / "result.json").read_text())
+    stored["code"] = {"commit": "0" * 40, "dirty": False, "digest": "0" * 16}  # as if older code wrote it
+    (folder / "result.json").write_text(json.dumps(stored))
+    assert "computed by other code: commit 0000000000" in RunResult.read(folder).stale()
+    _run_cli(*args)
+    log = (folder / "mediated_transfer.log").read_text()
+    assert "found, STALE (computed by other code" in log and "rerun_stale=true" in log
+    assert RunResult.read(folder).code["digest"] == "0" * 16  # reused as it is, but not silently
+
+    _run_cli(*args, "rerun_stale=true")
+    assert RunResult.read(folder).stale() is None  # recomputed by this code

@@ -51,6 +51,11 @@ class RunResult:
     discovered the mediated interaction. None: never within the budget."""
     config: dict[str, Any] = field(default_factory=dict)
     """The resolved config of the run."""
+    code: dict[str, Any] = field(default_factory=dict)
+    """The code that computed it: git commit, dirty tree, digest of the computing sources
+    (provenance.code_version)."""
+    results_format: int | None = None
+    """provenance.RESULTS_FORMAT when written; None: written before formats were recorded."""
 
     def write(self, folder: str | os.PathLike) -> Path:
         folder = Path(folder)
@@ -66,6 +71,12 @@ class RunResult:
     def read(cls, folder: str | os.PathLike) -> "RunResult":
         data = json.loads((Path(folder) / RESULT_FILE).read_text())
         return cls(**data)
+
+    def stale(self) -> str | None:
+        """Why this result no longer matches the code (provenance.staleness); None if current."""
+        from .provenance import staleness
+
+        return staleness(self.code, self.results_format)
 
     @staticmethod
     def exists(folder: str | os.PathLike) -> bool:

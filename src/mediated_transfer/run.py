@@ -19,10 +19,11 @@ from typing import Any, Callable
 import numpy as np
 
 from . import metrics
-from .configs import config_from_mapping
+from .config.mapping import config_from_mapping
 from .env import WorldConfig, sample_tasks
 from .env.mediated_env import MediatedInteractionEnv
 from .learners.base import Learner
+from .provenance import RESULTS_FORMAT, code_version
 from .learners.factory import make_learner, validate_learner_choice
 from .results import RunResult
 from .transfer.source_tasks import sensor_vectors, source_task_set
@@ -75,6 +76,8 @@ class RunSpec:
         )
         if self.strategy not in STRATEGIES:
             raise ValueError(f"strategy={self.strategy!r} is unknown; allowed: {', '.join(STRATEGIES)}")
+        if self.seed < 0:
+            raise ValueError(f"seed must be >= 0, got {self.seed}")
         if self.n_source < 0:
             raise ValueError(f"n_source must be >= 0, got {self.n_source}")
         if self.n_source > self.source_pool_size:
@@ -202,6 +205,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         wall_time_s=wall,
         learning_steps_per_s=spec.budget / learn_time if learn_time > 0 else math.inf,
         learner_stats=dict(learner.stats),
+        code=code_version(),
+        results_format=RESULTS_FORMAT,
     )
 
 

@@ -30,8 +30,12 @@ ENV_ID = "mediated_transfer/MediatedInteraction-v0"
 # The entry point is a string, so making the environment imports nothing more than this did;
 # the guard keeps a re-import from re-registering (Gymnasium would warn).
 if ENV_ID not in gymnasium.registry:
+    # The episode limit is the paper's 100 steps (WorldConfig.max_episode_steps), declared so
+    # that env.spec.max_episode_steps tells learners and wrappers; the environment truncates at
+    # its own config's limit, so a world with another limit needs max_episode_steps= here too.
     gymnasium.register(
-        id=ENV_ID, entry_point="mediated_transfer.env.mediated_env:MediatedInteractionEnv"
+        id=ENV_ID, entry_point="mediated_transfer.env.mediated_env:MediatedInteractionEnv",
+        max_episode_steps=WorldConfig.max_episode_steps,
     )
 
 __all__ = [

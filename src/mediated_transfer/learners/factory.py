@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from ..configs import config_from_mapping
+from ..config.mapping import config_from_mapping
 from ..env.config import WorldConfig
 from ..env.task import PICKING_LOCATIONS
 from .base import Learner

@@ -11,7 +11,7 @@ import logging
 import sys
 from collections.abc import Sequence
 
-from ..app import CONF_DIR, CONFIG_NAME, quote_numeric_choices
+from ..config.compose import CONF_DIR, CONFIG_NAME, prepare_overrides as quote_numeric_choices
 from .build import Report, build_report
 
 USAGE = __doc__

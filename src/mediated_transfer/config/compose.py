@@ -1,0 +1,168 @@
+"""From command-line overrides to a composed, checked config, or one line saying what is wrong.
+
+Used by the entry point (before Hydra starts anything), by reporting and by tuning, so that all
+three accept the same overrides and refuse the same mistakes with the same messages:
+
+- a wrong type (``env.goal_radius=abc``) or an unknown option (``scale=smok``): Hydra's
+  multi-line error, condensed to one line naming the override and the allowed options;
+- an unknown key, also one added with ``+`` (``+algoritm=dqn``, which Hydra itself would
+  accept): refused, naming the nearest valid key;
+- ``n_source=<k>`` for any k >= 0, although the group's files hold only the paper's values.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import re
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from hydra import compose, initialize_config_dir
+from hydra.core.global_hydra import GlobalHydra
+from hydra.errors import HydraException, MissingConfigException
+from omegaconf import DictConfig, OmegaConf
+from omegaconf.errors import OmegaConfBaseException
+
+from . import schema
+
+CONF_DIR = Path(__file__).resolve().parents[3] / "conf"
+"""The config tree; it sits next to src/ (the package is installed in editable mode)."""
+CONFIG_NAME = "config"
+NUMERIC_GROUPS = ("n_source",)
+"""Config groups whose options are numbers: their choices are quoted for Hydra."""
+
+
+class ConfigError(ValueError):
+    """A configuration that cannot run; the message (one line) names the key and what is allowed."""
+
+
+# --- overrides as typed on the command line ------------------------------------------------------
+
+
+def is_override(arg: str) -> bool:
+    """Hydra override (``key=value``, ``+key=value``, ``~key``), not a flag or a flag's value."""
+    return not arg.startswith("-") and ("=" in arg or arg.startswith("~"))
+
+
+def prepare_overrides(overrides: Sequence[str]) -> list[str]:
+    """Quote numeric group choices (``n_source=7`` -> ``n_source='7'``) and register the
+    options Hydra cannot find in conf/ (any N_source >= 0).
+
+    Hydra reads an unquoted 7 as the integer 7 and rejects it as a group choice, whose options
+    are names; quoting keeps the natural spelling usable.
+    """
+    out = []
+    for arg in overrides:
+        match = re.fullmatch(r"([\w.]+)=(\d+(?:,\d+)*)", arg)
+        if match and match.group(1) in NUMERIC_GROUPS:
+            values = [int(v) for v in match.group(2).split(",")]
+            present = {p.stem for p in (CONF_DIR / match.group(1)).glob("*.yaml")}
+            schema.register_n_source([v for v in values if str(v) not in present])
+            arg = f"{match.group(1)}=" + ",".join(f"'{v}'" for v in values)
+        out.append(arg)
+    return out
+
+
+# --- composing -------------------------------------------------------------------------------------
+
+
+@contextmanager
+def hydra_context() -> Iterator[None]:
+    """Hydra's compose API on conf/ (reuses an initialised Hydra, e.g. inside a job)."""
+    if GlobalHydra.instance().is_initialized():
+        yield
+        return
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        yield
+
+
+def compose_config(overrides: Sequence[str], hydra: bool = False) -> DictConfig:
+    """The composed config of ``overrides`` (as typed); ConfigError in one line if it is wrong."""
+    overrides = prepare_overrides(overrides)
+    try:
+        with hydra_context():
+            cfg = compose(CONFIG_NAME, overrides=list(overrides), return_hydra_config=hydra)
+    except (HydraException, OmegaConfBaseException) as error:
+        raise ConfigError(one_line(error)) from None
+    check_known_keys(cfg)
+    return cfg
+
+
+def one_line(error: BaseException) -> str:
+    """Hydra's and OmegaConf's messages, condensed to the line that says what is wrong."""
+    if isinstance(error, MissingConfigException):
+        missing = str(error.missing_cfg_file or "")
+        group, _, option = missing.rpartition("/")
+        allowed = ", ".join(error.options or [])
+        if group:
+            return f"{group}={option} is not an option of '{group}'; allowed: {allowed}"
+        return _first_line(str(error))
+    text = _first_line(str(error))
+    cause = error.__cause__ or error.__context__
+    unknown = re.match(r"Could not override '([\w.]+)'", text)
+    if unknown and cause is not None and "not in" in str(cause):
+        return _unknown_key_message(unknown.group(1), _schema_fields(str(cause)))
+    if cause is not None and str(cause).strip():
+        detail = _first_line(str(cause))
+        full_key = re.search(r"full_key: (\S+)", str(cause))
+        if full_key and full_key.group(1) not in text + detail:
+            detail += f" (key {full_key.group(1)})"
+        text = f"{text.removeprefix('Error merging override ')}: {detail}"
+    return text
+
+
+def _first_line(text: str) -> str:
+    lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
+    return lines[0] if lines else text.strip()
+
+
+# --- unknown keys ------------------------------------------------------------------------------------
+
+
+def check_known_keys(cfg: DictConfig) -> None:
+    """Every key of ``cfg`` is a field of its node's schema; else ConfigError naming the nearest.
+
+    Hydra lets ``+key=value`` add a key to any node (it opens struct mode for it), so a typo
+    added that way (``+algoritm=dqn``, ``+scale.foo=1``) would otherwise run a default run.
+    """
+    for path, unknown, allowed in _unknown_keys(cfg, ""):
+        raise ConfigError(_unknown_key_message(path + unknown, allowed))
+
+
+def _unknown_key_message(key: str, allowed: list[str]) -> str:
+    path, _, name = key.rpartition(".")
+    prefix = f"{path}." if path else ""
+    nearest = difflib.get_close_matches(name, allowed, n=1, cutoff=0.5)
+    hint = f"did you mean '{prefix}{nearest[0]}'?" if nearest else f"keys here: {', '.join(allowed)}"
+    return f"unknown key '{key}'; {hint}"
+
+
+def _schema_fields(message: str) -> list[str]:
+    """Fields of the schema named in OmegaConf's "Key 'x' not in 'LinearQOption'"."""
+    named = re.search(r"not in '(\w+)'", message)
+    classes = [schema.RunConfig, schema.ScaleConfig, schema.PathsConfig, schema.TrackingConfig,
+               schema.ReportConfig, *(c for g in schema.PYTHON_OPTIONS.values() for c in g.values())]
+    for cls in classes:
+        if named and cls.__name__ == named.group(1):
+            return [f.name for f in dataclasses.fields(cls)]
+    return []
+
+
+def _unknown_keys(node: Any, path: str):
+    if not isinstance(node, DictConfig):
+        return
+    kind = OmegaConf.get_type(node)
+    if dataclasses.is_dataclass(kind):
+        allowed = [f.name for f in dataclasses.fields(kind)]
+        if not path:
+            allowed.append("hydra")  # Hydra's own node, present when composed with it
+        for key in node.keys():
+            if key not in allowed:
+                yield path, str(key), allowed
+    for key in node.keys():
+        if str(key) == "hydra" and not path:
+            continue
+        yield from _unknown_keys(node._get_node(key), f"{path}{key}.")

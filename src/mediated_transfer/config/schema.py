@@ -1,0 +1,185 @@
+"""The structured configs behind conf/: what Hydra checks while it composes.
+
+One place per default, by kind:
+
+- The world and the learners are used from Python as well (``gymnasium.make``, tests, the
+  bench), so their dataclasses hold the defaults and explain them in field docstrings:
+  ``WorldConfig`` (env/config.py), ``LinearQConfig`` (learners/linear_q.py), ``RBFConfig``
+  (learners/rbf.py), ``FSRConfig`` (learners/fsr.py), ``DQNConfig`` (learners/dqn.py). They are
+  the options of the groups ``env``, ``algorithm`` and ``representation`` (registered below;
+  there are no YAML files for them).
+- The experiment's plumbing (scales, paths, tracking, the root keys, table reports) exists only
+  for the command line, so its values and their comments live in conf/*.yaml; the dataclasses
+  here give their keys and types only.
+
+Hydra refuses a wrong type (``env.goal_radius=abc``) and an unknown key while composing;
+ranges and pairings are checked by the dataclasses and RunSpec.validate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional
+
+from hydra.core.config_store import ConfigStore
+from omegaconf import MISSING, DictConfig, OmegaConf
+
+from ..env.config import WorldConfig
+from ..learners.dqn import DQNConfig
+from ..learners.fsr import FSRConfig
+from ..learners.linear_q import LinearQConfig
+from ..learners.rbf import RBFConfig
+
+ROOT_SCHEMA = "run_schema"
+"""Name of the root schema in the ConfigStore; conf/config.yaml lists it first."""
+
+
+# --- the groups configured in Python: option name -> the dataclass with its defaults ----------
+# A group option carries its own name (``algorithm.name``), which tables, folders and MLflow use.
+
+
+@dataclass(frozen=True)
+class LinearQOption(LinearQConfig):
+    """``algorithm=linear_q``: linear Q(lambda), the learner of Tables II and III."""
+
+    name: str = "linear_q"
+
+
+@dataclass(frozen=True)
+class DQNOption(DQNConfig):
+    """``algorithm=dqn``: the deep Q-learner of Table IV (needs representation=network)."""
+
+    name: str = "dqn"
+
+
+@dataclass(frozen=True)
+class RBFOption(RBFConfig):
+    """``representation=rbf``: 13829 Gaussian features (Table II)."""
+
+    name: str = "rbf"
+
+
+@dataclass(frozen=True)
+class FSROption(FSRConfig):
+    """``representation=fsr``: 310 binary features (Table III)."""
+
+    name: str = "fsr"
+
+
+@dataclass(frozen=True)
+class NetworkOption:
+    """``representation=network``: the DQN's own features; its architecture keys
+    (hidden_size, num_hidden_layers) are in ``algorithm``."""
+
+    name: str = "network"
+
+
+PYTHON_OPTIONS: dict[str, dict[str, type]] = {
+    "env": {"default": WorldConfig},
+    "algorithm": {"linear_q": LinearQOption, "dqn": DQNOption},
+    "representation": {"rbf": RBFOption, "fsr": FSROption, "network": NetworkOption},
+}
+
+
+# --- the groups configured in YAML: keys and types only ---------------------------------------
+
+
+@dataclass
+class ScaleConfig:
+    """conf/scale/*.yaml: how long and how often a run learns and is evaluated."""
+
+    name: str = MISSING
+    budget: int = MISSING
+    eval_points: int = MISSING
+    eval_episodes: int = MISSING
+    seeds: int = MISSING
+    reports_subdir: str = MISSING
+
+
+@dataclass
+class PathsConfig:
+    """conf/paths/default.yaml: every output location."""
+
+    root: str = MISSING
+    multirun_dir: str = MISSING
+    sweep_dir: str = MISSING
+    runs_dir: str = MISSING
+    reports_dir: str = MISSING
+    cache_dir: str = MISSING
+    mlflow_db: str = MISSING
+    mlflow_artifacts: str = MISSING
+
+
+@dataclass
+class TrackingConfig:
+    """conf/tracking/*.yaml: MLflow on or off, and where."""
+
+    enabled: bool = MISSING
+    uri: Optional[str] = MISSING
+    artifact_location: Optional[str] = MISSING
+
+
+@dataclass
+class ReportConfig:
+    """The ``report`` section of conf/experiment/*.yaml: which paper table a sweep reproduces."""
+
+    paper_table: str = MISSING
+    title: str = MISSING
+    figure: str = MISSING
+    figure_title: str = MISSING
+
+
+@dataclass
+class RunConfig:
+    """The root of conf/config.yaml: one learning run. Values and comments: conf/config.yaml."""
+
+    name: str = MISSING
+    cell: str = MISSING
+    seed: int = MISSING
+    threshold: float = MISSING
+    source_pool_size: int = MISSING
+    source_set_seed: int = MISSING
+    threads_per_run: int = MISSING
+    rerun_stale: bool = MISSING
+    strategy: str = MISSING
+    n_source: int = MISSING
+    paths: PathsConfig = MISSING
+    scale: ScaleConfig = MISSING
+    tracking: TrackingConfig = MISSING
+    # Typed per option (PYTHON_OPTIONS): a field of a single dataclass type could not hold both
+    # algorithms, and a frozen dataclass type here would make the node read-only.
+    env: Any = MISSING
+    algorithm: Any = MISSING
+    representation: Any = MISSING
+    report: Optional[ReportConfig] = None
+
+
+def _option_node(cls: type) -> DictConfig:
+    # The dataclasses are frozen (immutable value objects in Python); their Hydra nodes must
+    # accept overrides, so the node is made writable. Its type still checks every value.
+    node = OmegaConf.structured(cls)
+    OmegaConf.set_readonly(node, False)
+    return node
+
+
+def register() -> None:
+    """Put the root schema and the Python-configured group options into Hydra's ConfigStore."""
+    store = ConfigStore.instance()
+    store.store(name=ROOT_SCHEMA, node=RunConfig)
+    for group, options in PYTHON_OPTIONS.items():
+        for name, cls in options.items():
+            store.store(group=group, name=name, node=_option_node(cls))
+
+
+def register_n_source(values: list[int]) -> None:
+    """Options ``n_source=<k>`` for any k >= 0 beyond the paper's (conf/n_source/*.yaml)."""
+    store = ConfigStore.instance()
+    for value in values:
+        store.store(group="n_source", name=str(value), node={"n_source": value}, package="_global_")
+
+
+def option_type(group: str, name: str) -> type | None:
+    return PYTHON_OPTIONS.get(group, {}).get(name)
+
+
+register()

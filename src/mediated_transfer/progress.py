@@ -1,0 +1,74 @@
+"""Progress lines: where a single run is, and how far a sweep has come and how long it has left."""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Callable
+
+from .sweep import PLAN_FILE
+
+if TYPE_CHECKING:
+    from .results import RunResult
+    from .run import RunSpec
+
+log = logging.getLogger("mediated_transfer")
+
+
+def single_run_progress(spec: "RunSpec") -> Callable[[int, int], None]:
+    """A callback for execute_run: ``<run>: step k/n, steps/s, ~time left``."""
+    started = time.perf_counter()
+
+    def report(step: int, budget: int) -> None:
+        elapsed = time.perf_counter() - started
+        left = elapsed * (budget - step) / step if step else math.nan
+        log.info("%s: step %d/%d, %.0f steps/s, ~%s left", spec.describe(), step, budget,
+                 step / elapsed if elapsed > 0 else math.nan, duration(left))
+
+    return report
+
+
+def run_line(label: str, result: "RunResult", status: str, sweep_name: str, sweep_dir: Path | None,
+             stale: str | None = None) -> str:
+    """``[sweep k/n, ~time left] <label>: L_R=..., steps/s`` for a finished (or found) run."""
+    if status == "exists":
+        what = "found, skipped" if stale is None else f"found, STALE ({stale}; rerun_stale=true recomputes it)"
+    else:
+        what = f"{result.learning_steps_per_s:,.0f} steps/s"
+    line = f"{label}: L_R={result.reward_loss:.2f}, {what}"
+    if sweep_dir is None:
+        return line
+    count = sweep_progress(sweep_dir)
+    if count is None:
+        return f"[{sweep_name}] {line}"
+    finished, total, left = count
+    eta = "" if left is None else f", ~{duration(left)} left"
+    return f"[{sweep_name} {finished}/{total}{eta}] {line}"
+
+
+def sweep_progress(sweep_dir: Path) -> tuple[int, int, float | None] | None:
+    """(finished runs, runs of the sweep, estimated seconds left), from the plan file written
+    before the sweep started and the result files present; None without a plan."""
+    try:
+        plan = json.loads((sweep_dir / PLAN_FILE).read_text())
+    except (OSError, ValueError):
+        return None
+    results = [p.stat().st_mtime for p in sweep_dir.glob("**/result.json")]
+    finished = min(len(results), plan["total"])
+    # Only runs computed since this launch tell the current speed (earlier ones were skipped).
+    computed = sum(t >= plan["started"] for t in results)
+    elapsed = time.time() - plan["started"]
+    left = (plan["total"] - finished) * elapsed / computed if computed else None
+    return finished, plan["total"], left
+
+
+def duration(seconds: float | None) -> str:
+    if seconds is None or not math.isfinite(seconds):
+        return "?"
+    seconds = int(round(seconds))
+    hours, rest = divmod(seconds, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}h{minutes:02d}m" if hours else f"{minutes}m{secs:02d}s"

@@ -1,0 +1,66 @@
+"""Which code computed a result, and whether a stored result is stale.
+
+Every result records the git commit and whether the working tree was dirty (for people), and a
+digest of the source files that compute a run (for the staleness check): the world, the
+learners, the transfer strategies, the run loop and the metrics. A change to reporting,
+tracking, docs or configs does not make results stale; a change to anything a curve depends
+on does. Results of an older results format are stale too.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import subprocess
+from pathlib import Path
+from typing import Any
+
+RESULTS_FORMAT = 2
+"""Version of result.json's layout (2: code version and discovery step recorded)."""
+
+PACKAGE = Path(__file__).resolve().parent
+COMPUTING_SOURCES = ("env", "learners", "transfer", "run.py", "metrics.py", "results.py")
+"""What a run's curve depends on, relative to the package."""
+
+
+@functools.cache
+def code_version() -> dict[str, Any]:
+    """``{"commit", "dirty", "digest"}`` of the code in this process (commit/dirty None without git)."""
+    return {"commit": _git("rev-parse", "HEAD"), "dirty": _dirty(), "digest": source_digest()}
+
+
+def source_digest(package: Path = PACKAGE) -> str:
+    digest = hashlib.sha256()
+    for entry in COMPUTING_SOURCES:
+        path = package / entry
+        files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
+        for file in files:
+            digest.update(file.relative_to(package).as_posix().encode())
+            digest.update(file.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def staleness(recorded: dict[str, Any] | None, results_format: int | None) -> str | None:
+    """Why a result recorded with ``recorded`` code is stale now; None when it is current."""
+    if results_format != RESULTS_FORMAT:
+        return f"results format {results_format or 1}, current {RESULTS_FORMAT}"
+    current = code_version()
+    if not recorded or recorded.get("digest") != current["digest"]:
+        commit = (recorded or {}).get("commit") or "unknown"
+        dirty = " (dirty)" if (recorded or {}).get("dirty") else ""
+        return f"computed by other code: commit {commit[:10]}{dirty}, now {str(current['commit'])[:10]}"
+    return None
+
+
+def _git(*args: str) -> str | None:
+    try:
+        out = subprocess.run(["git", "-C", str(PACKAGE), *args], capture_output=True, text=True,
+                             timeout=10, check=True)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip()
+
+
+def _dirty() -> bool | None:
+    status = _git("status", "--porcelain", "--untracked-files=no")
+    return None if status is None else bool(status)

@@ -1,0 +1,106 @@
+"""Before anything runs: check every run of a command and prepare what runs share.
+
+``preflight`` is called by the entry point before Hydra starts, in the launching process, so a
+bad config stops the command before any folder exists, and its errors are never turned into
+warnings (Hydra's callbacks would do that). For a sweep it composes every distinct job config
+(seeds do not change validity) and checks it, then creates the MLflow store and experiment once
+(SQLite must not be initialised by parallel workers), clusters the source task sets once, and
+writes the plan that progress lines count against.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import logging
+import time
+from collections import OrderedDict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from hydra.types import RunMode
+from omegaconf import DictConfig
+
+from . import tracking
+from .atomic import atomic_write_text
+from .config.compose import ConfigError, compose_config, prepare_overrides
+from .config.spec import run_spec
+
+if TYPE_CHECKING:
+    from .run import RunSpec
+
+log = logging.getLogger("mediated_transfer")
+
+PLAN_FILE = ".sweep_plan.json"
+"""Written into the sweep folder before the jobs start: how many runs the sweep has."""
+
+
+def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | None:
+    """Check the command's config(s) and prepare a sweep; ConfigError (one line) if anything is
+    wrong. Returns the sweep's job override lists, None for a single run."""
+    overrides = prepare_overrides(overrides)
+    parsed = OverridesParser.create().parse_overrides(list(overrides))
+    fixed = [o.input_line for o in parsed if not o.is_sweep_override()]
+    base = compose_config(fixed, hydra=True)
+    if not multirun and base.hydra.mode != RunMode.MULTIRUN:
+        if len(fixed) < len(overrides):
+            swept = [o.input_line for o in parsed if o.is_sweep_override()]
+            raise ConfigError(f"{' '.join(swept)} sweeps over values: add -m (--multirun)")
+        run_spec(base)
+        return None
+    # Hydra's own overrides (launcher, ...) are not part of a job's config.
+    jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
+    distinct = sorted({tuple(o for o in job if not o.startswith("seed=")) for job in jobs})
+    specs = [run_spec(compose_config(list(job))) for job in distinct]
+    _prepare_tracking(base)
+    _warm_source_task_cache(specs)
+    sweep_dir = Path(base.hydra.sweep.dir)
+    sweep_dir.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(sweep_dir / PLAN_FILE, json.dumps({"total": len(jobs), "started": time.time()}) + "\n")
+    log.info("sweep %s: %d runs in %s", base.name, len(jobs), sweep_dir)
+    return jobs
+
+
+def planned_jobs(config: DictConfig, overrides: Sequence[str] | None = None) -> list[list[str]]:
+    """The override list of every job, as Hydra's basic sweeper builds them: the config's
+    ``hydra.sweeper.params`` first, then the command line's overrides (default: the config's
+    own), a later value of a key replacing an earlier one in its place; every combination."""
+    params = config.hydra.sweeper.get("params") or {}
+    task = list(config.hydra.overrides.task) if overrides is None else list(overrides)
+    lines = [f"{k}={v}" for k, v in params.items()] + task
+    choices: OrderedDict[str, list[str]] = OrderedDict()
+    for override in OverridesParser.create().parse_overrides(lines):
+        key = override.get_key_element()
+        if not override.is_sweep_override():
+            choices[key] = [f"{key}={override.get_value_element_as_str()}"]
+        elif override.is_discrete_sweep():
+            choices[key] = [f"{key}={value}" for value in override.sweep_string_iterator()]
+        else:
+            raise ConfigError(f"{override.input_line}: interval sweeps need a sweeper plugin (e.g. tuning)")
+    return [list(job) for job in itertools.product(*choices.values())]
+
+
+def _is_hydra_override(override: str) -> bool:
+    return override.lstrip("+~").startswith(("hydra.", "hydra/"))
+
+
+def _prepare_tracking(config: DictConfig) -> None:
+    if config.tracking.enabled:
+        try:
+            tracking.prepare(tracking.TrackingSettings.from_config(config.tracking), experiment=str(config.name))
+        except ValueError as error:
+            raise ConfigError(str(error)) from None
+
+
+def _warm_source_task_cache(specs: Sequence["RunSpec"]) -> None:
+    from .transfer.source_tasks import precompute_source_task_sets
+
+    groups: dict[tuple, set[int]] = {}
+    for s in specs:
+        if s.cache_dir is not None:
+            groups.setdefault((s.world, s.source_pool_size, s.source_set_seed, s.cache_dir), set()).add(s.n_source)
+    for (world, pool_size, seed, cache_dir), n_sources in groups.items():
+        if n_sources - {0}:
+            precompute_source_task_sets(n_sources, world, pool_size, seed, cache_dir=cache_dir)
