@@ -2,8 +2,8 @@
 
 The paper fixes the interaction range (radius 10), the move length (one unit), the rotation step
 (pi/4), the episode length (100), the reward (10) and the action noise (0.1). Everything else it
-leaves open; the defaults below are this project's choices, exposed as ``conf/env/``, and the
-tests check that both source and target tasks stay solvable by a scripted policy with them.
+leaves open; the defaults below are this project's choices (the option ``env=default``, see
+config/schema.py), and the tests check that both source and target tasks stay solvable by a scripted policy with them.
 """
 
 from __future__ import annotations
