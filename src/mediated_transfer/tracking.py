@@ -112,10 +112,16 @@ def log_run(
         "wall_time_s": result.wall_time_s,
         "source_tasks_solved": result.source_tasks_solved,
         "source_phase_end": result.source_phase_end,
+        "first_target_reward_step": result.first_target_reward_step,
         **{f"learner.{k}": v for k, v in result.learner_stats.items()},
     }
     metrics += [Metric(k, float(v), 0, 0) for k, v in scalars.items() if _is_number(v)]
     all_tags = {**tags, "kind": KIND_RUN}
+    # MLflow's own source tags: the UI shows the commit a run was computed with.
+    if result.code.get("commit"):
+        all_tags["mlflow.source.git.commit"] = str(result.code["commit"])
+    if result.code.get("dirty") is not None:
+        all_tags["code_dirty"] = str(bool(result.code["dirty"])).lower()
     if result.time_to_threshold is None:
         all_tags["time_to_threshold"] = NEVER
     return _create(client, experiment_id, key, run_name, metrics, params, all_tags, artifacts)
