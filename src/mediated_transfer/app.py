@@ -146,6 +146,13 @@ def cli(argv: Sequence[str] | None = None) -> Any:
             preflight(overrides, multirun=any(a in ("-m", "--multirun") for a in args))
         except ConfigError as error:
             raise SystemExit(f"Invalid configuration: {error}") from None
+        except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line
+            raise SystemExit(f"Could not prepare the runs: {type(error).__name__}: {_first_line(error)}") from None
     quoted = iter(prepare_overrides(overrides))
     sys.argv = [sys.argv[0], *(next(quoted) if is_override(a) else a for a in args)]
     return main()
+
+
+def _first_line(error: BaseException) -> str:
+    lines = str(error).strip().splitlines()
+    return lines[0] if lines else ""
