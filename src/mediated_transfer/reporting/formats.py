@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
+from tabulate import TableFormat
 
 _LATEX_SPECIALS = str.maketrans({
     "\\": r"\textbackslash{}", "&": r"\&", "%": r"\%", "$": r"\$", "#": r"\#", "_": r"\_",
@@ -47,10 +48,24 @@ LATEX = Markup(pm=r"$\pm$", approx=r"$\approx$ ", reward=r"$\langle R\rangle$",
                code=lambda name: rf"\texttt{{{latex_text(name)}}}", text=latex_text)
 
 
+def _row(cells: list[str], widths, aligns) -> str:
+    return "| " + " | ".join(cell.strip() for cell in cells) + " |"
+
+
+def _alignment_row(widths, aligns) -> str:
+    return "|" + "|".join("---:" if align == "right" else "---" for align in aligns) + "|"
+
+
+# tabulate's "pipe" format without padding cells to the column width: rows read "| 2/2 |" (as the
+# tables always have; tests and readers grep for them) and diffs of a table stay one row long.
+_COMPACT_PIPE = TableFormat(lineabove=None, linebelowheader=_alignment_row, linebetweenrows=None,
+                            linebelow=None, headerrow=_row, datarow=_row, padding=0, with_header_hide=None)
+
+
 def write_markdown(frame: pd.DataFrame, path: Path, preamble: Sequence[str], align: Sequence[str]) -> Path:
     """``preamble`` paragraphs (the first is the title), then the table; ``align``: left/right per column."""
     # disable_numparse: cells are texts already formatted ("1,000", "2/2"); tabulate must not reformat them.
-    table = frame.to_markdown(index=False, colalign=tuple(align), disable_numparse=True)
+    table = frame.to_markdown(index=False, tablefmt=_COMPACT_PIPE, colalign=tuple(align), disable_numparse=True)
     path.write_text("\n\n".join([f"# {preamble[0]}", *preamble[1:], table]) + "\n")
     return path
 
