@@ -12,7 +12,6 @@ and one figure, L_R per table cell with a bar per sweep; to
 from __future__ import annotations
 
 import argparse
-import math
 import shlex
 import sys
 from collections.abc import Sequence
@@ -24,10 +23,10 @@ from omegaconf import DictConfig
 from ..metrics import MetricsConfig
 from .build import finished_runs, path_name
 from .collect import variant_label
-from .comparison import Sweep, compared_cells, numbers, preamble, shown
+from .comparison import Sweep, compared_cells, numbers, preamble, reward_loss_bars, shown
 from .compose import (USER_ERRORS, ReportError, compose_experiment, experiment_names, one_line,
                       split_experiments, variant_of)
-from .figures import Bars, plot_loss_bars
+from .figures import plot_loss_bars
 from .formats import write_csv, write_markdown
 from .paper import SCHEMES, paper_rows
 
@@ -48,7 +47,7 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
     """Table and figure of the sweeps of ``experiment``: the baseline (unless not ``baseline``),
     then each of ``variants`` (space-separated overrides), all with the ``shared`` overrides."""
     configs = ([compose_experiment(experiment, shared)] if baseline else []) + [
-        compose_experiment(experiment, [*shared, *shlex.split(v)]) for v in variants]
+        compose_experiment(experiment, [*shared, *_overrides(v)]) for v in variants]
     if len(configs) < 2:
         raise ReportError("--variant: a comparison needs two sweeps at least (the baseline and a "
                           "--variant, or two --variant without --no-baseline)")
@@ -74,15 +73,17 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
         write_csv(numbers(sweeps, cells), out / f"{stem}.csv"),
     ]
     labels = [SCHEMES[s] if s == "none" else f"{s} {n}" for s, n in cells]
-    bars = [Bars(s.label,
-                 [s.summaries[f"{c}_{n}"]["reward_loss_mean"] if f"{c}_{n}" in s.summaries else math.nan
-                  for c, n in cells],
-                 [s.summaries[f"{c}_{n}"]["reward_loss_sem"] if f"{c}_{n}" in s.summaries else math.nan
-                  for c, n in cells]) for s in sweeps]
-    files.append(plot_loss_bars(labels, bars, f"{title}: reward loss per table cell",
+    files.append(plot_loss_bars(labels, reward_loss_bars(sweeps, cells), f"{title}: reward loss per table cell",
                                 f"scale {first.scale.name}: " + " vs ".join(s.label for s in sweeps)
                                 + "; mean of runs +/- SEM, lower is better", out / f"{stem}.png"))
     return Comparison(files, sweeps)
+
+
+def _overrides(variant: str) -> list[str]:
+    try:
+        return shlex.split(variant)
+    except ValueError as error:  # an unbalanced quote
+        raise ReportError(f"--variant {variant!r}: {error}; give space-separated overrides") from None
 
 
 def _sweep(cfg: DictConfig) -> Sweep:

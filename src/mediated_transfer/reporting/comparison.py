@@ -1,6 +1,7 @@
 """Sweeps of one experiment side by side (the baseline and its variants): per table cell, each
 sweep's runs, reward loss L_R (mean +/- SEM) and time to threshold, and how far each sweep's L_R
-lies from the first sweep's. One pandas DataFrame of texts (Markdown) and one of numbers (CSV).
+lies from the first sweep's. One pandas DataFrame of texts (Markdown), one of numbers (CSV), and
+the bars of the figure.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from dataclasses import dataclass
 import pandas as pd
 
 from .collect import variant_label
+from .figures import Bars
 from .formats import MARKDOWN
 from .paper import SCHEMES, PaperRow
 from .tables import reward_loss_text, steps_text
@@ -98,6 +100,17 @@ def numbers(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
             frame["reward_loss_difference" + tag] = pd.array([d and d[0] for d in differences], "Float64")
             frame["reward_loss_difference_sem" + tag] = pd.array([d and d[1] for d in differences], "Float64")
     return frame
+
+
+def reward_loss_bars(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> list[Bars]:
+    """Per sweep, L_R mean and SEM of each cell (nan where the sweep did not run it)."""
+    bars = []
+    for sweep in sweeps:
+        summaries = [sweep.summaries.get(f"{s}_{n}") for s, n in cells]
+        bars.append(Bars(sweep.label,
+                         [math.nan if x is None else x["reward_loss_mean"] for x in summaries],
+                         [math.nan if x is None else x["reward_loss_sem"] for x in summaries]))
+    return bars
 
 
 def preamble(table: str, title: str, scale: str, threshold: float, max_reward: float,
