@@ -34,6 +34,8 @@ class Markup:
     reward_loss: str
     """L_R, the reward loss."""
     max_reward: str
+    n_source: str
+    """N_source, the number of source tasks."""
     geq: str
     code: Callable[[str], str]
     """A name from the config (scale, variant), set in code type."""
@@ -41,10 +43,12 @@ class Markup:
     """Free text (titles, percentages) made safe for the format."""
 
 
-MARKDOWN = Markup(pm="±", approx="~", reward="<R>", reward_loss="L_R", max_reward="R_max", geq=">=",
+MARKDOWN = Markup(pm="±", approx="~", reward="<R>", reward_loss="L_R", max_reward="R_max",
+                  n_source="N_source", geq=">=",
                   code=lambda name: f"`{name}`", text=lambda text: text)
 LATEX = Markup(pm=r"$\pm$", approx=r"$\approx$ ", reward=r"$\langle R\rangle$",
-               reward_loss=r"$\mathcal{L}_R$", max_reward=r"$R_\mathrm{max}$", geq=r"$\geq$",
+               reward_loss=r"$\mathcal{L}_R$", max_reward=r"$R_\mathrm{max}$",
+               n_source=r"$N_\mathrm{source}$", geq=r"$\geq$",
                code=lambda name: rf"\texttt{{{latex_text(name)}}}", text=latex_text)
 
 

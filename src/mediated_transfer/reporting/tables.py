@@ -103,7 +103,7 @@ def write_tables(rows: list[TableRow], header: TableHeader, out_dir: str | Path,
 
 def shown(rows: list[TableRow], m: Markup) -> pd.DataFrame:
     """The table as read: one text per cell, headed as in the paper."""
-    heads = ["Scheme", "N_source" if m is MARKDOWN else r"$N_\mathrm{source}$", "Runs", m.reward_loss,
+    heads = ["Scheme", m.n_source, "Runs", m.reward_loss,
              "Time to threshold", "Per-run median (reached)", f"{m.reward_loss} (paper)",
              "Time to threshold (paper)"]
     return pd.DataFrame([_texts(r, m) for r in rows], columns=heads)
