@@ -311,3 +311,12 @@ def test_each_report_line_is_printed_once(tmp_path, capfd):
     assert reporting_main(reporting_args(tmp_path)) == 0
     out, err = capfd.readouterr()
     assert (out + err).count("table2_rbf: 5 runs") == 1 and err == ""
+
+
+def test_every_experiment_reports_the_variant_where_it_applies_and_says_where_not(two_sweeps, capsys):
+    # algorithm.lambda_ is a key of linear Q(lambda) (Tables II, III), not of the DQN (Table IV).
+    assert reporting_main(reporting_args(two_sweeps, LAMBDA)[1:]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith(f"table2_rbf [{LAMBDA}]: 3 runs -> ") and out.count("\n") == 1
+    assert "skipped: table3_fsr: no runs of the variant" in err
+    assert "skipped: table4_dnn: algorithm.lambda_: no such key; keys of algorithm: name" in err

@@ -14,7 +14,7 @@ import sys
 from collections.abc import Sequence
 
 from .build import NoRuns, Report, build_report
-from .compose import USER_ERRORS, compose_experiment, experiment_names, one_line, split_experiments
+from .compose import USER_ERRORS, ReportError, compose_experiment, experiment_names, one_line, split_experiments
 
 USAGE = __doc__
 
@@ -22,21 +22,24 @@ USAGE = __doc__
 def build(overrides: Sequence[str]) -> tuple[list[Report], list[str]]:
     """Reports of the named experiments (an error if one has no runs yet), or of every
     experiment that has runs when none is named (an error only if none has); and one line per
-    experiment skipped for want of runs."""
+    experiment skipped: no runs, or the overrides do not apply to it (algorithm.lambda_ is not
+    a key of the DQN experiment)."""
     named, rest = split_experiments(overrides)
-    reports, skipped = [], []
     names = named or experiment_names()
+    reports, skipped = [], []
     for name in names:
-        cfg = compose_experiment(name, rest)
         try:
-            reports.append(build_report(cfg))
-        except NoRuns as error:
+            reports.append(build_report(compose_experiment(name, rest)))
+        except (NoRuns, ReportError) as error:
             if named:
                 raise
-            skipped.append(str(error))
+            skipped.append((name, error))
     if not reports:
-        raise NoRuns(f"none of {', '.join(names)} has runs; {names[0]}: {skipped[0]}")
-    return reports, skipped
+        first_name, first = skipped[0]
+        if not any(isinstance(error, NoRuns) for _, error in skipped):
+            raise first  # the overrides compose for no experiment (e.g. scale=smok): one error says it
+        raise NoRuns(f"none of {', '.join(names)} has runs; {first_name}: {first}")
+    return reports, [f"{name}: {error}" for name, error in skipped]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
