@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import csv
 import io
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -17,8 +19,11 @@ from mediated_transfer.metrics import summarise_runs
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.reporting.build import build_report
 from mediated_transfer.reporting.collect import collect_sweep
+from mediated_transfer.reporting.compare import main as compare_main
+from mediated_transfer.reporting.compose import compose_experiment as compose_report_config
 from mediated_transfer.reporting.figures import fastest_transfer
 from mediated_transfer.reporting.paper import paper_rows
+from mediated_transfer.results import RunResult
 
 from .test_tracking import fresh_store, synthetic_result
 
@@ -178,3 +183,156 @@ def test_command_line_builds_the_named_experiments(tmp_path, capsys):
     assert (tmp_path / "reports" / "smoke" / "table2_rbf.md").is_file()
     with pytest.raises(SystemExit, match="allowed: table2_rbf, table3_fsr, table4_dnn"):
         reporting_main(["experiment=table9"])
+
+
+# --- variants: runs of other overrides than the table cell and seed ----------------------------
+
+LAMBDA = "algorithm.lambda_=0.5"
+VARIANT_CURVES = {
+    ("none", 0): [[5.0, 5.0], [3.0, 5.0]],  # L_R 10, 12: 11 +/- 1
+    ("regular", 15): [[9.0, 9.0]],          # L_R 2; a cell the baseline (CURVES) did not run
+}
+
+
+def write_variant(sweep_dir: Path, variant: str = LAMBDA, curves=VARIANT_CURVES) -> None:
+    for (strategy, n_source), runs in curves.items():
+        for seed, curve in enumerate(runs):
+            result = synthetic_result(strategy, n_source, seed, curve, (100, 200))
+            result.write(sweep_dir / f"{strategy}_{n_source}" / f"seed={seed}" / variant)
+
+
+def reporting_args(root: Path, *overrides: str) -> list[str]:
+    return ["experiment=table2_rbf", "scale=smoke", f"paths.root={root}", "tracking=none", *overrides]
+
+
+@pytest.fixture
+def two_sweeps(tmp_path):
+    """The baseline (CURVES) and the variant algorithm.lambda_=0.5 (VARIANT_CURVES) in one sweep folder."""
+    sweep_dir = Path(compose_experiment(tmp_path).paths.sweep_dir)
+    write_sweep(sweep_dir)
+    write_variant(sweep_dir)
+    return tmp_path
+
+
+def test_a_variant_and_the_baseline_give_separate_reports_of_their_own_runs(two_sweeps):
+    baseline = build_report(compose_report_config("table2_rbf", reporting_args(two_sweeps)[1:]))
+    variant = build_report(compose_report_config("table2_rbf", reporting_args(two_sweeps, LAMBDA)[1:]))
+    reports = two_sweeps / "reports" / "smoke"
+    assert (baseline.variant, baseline.runs) == ("", 5) and (variant.variant, variant.runs) == (LAMBDA, 3)
+    assert variant.tables[0] == reports / "variants" / LAMBDA / "table2_rbf.md"
+    assert variant.figure == reports / "variants" / LAMBDA / "figure4_rbf.png" and variant.figure.is_file()
+
+    md = variant.tables[0].read_text()
+    assert md.splitlines()[0].endswith(f"variant `{LAMBDA}`") and f"Variant `{LAMBDA}`" in md
+    assert _row(md, "without transfer", 0)[2:5] == ["2/2", "11.00 ± 1.00", "-"]
+    assert _row(md, "regular transfer", 15)[2:5] == ["1/2", "2.00 ± n/a", "100"]
+    assert _row(md, "regular transfer", 50)[2:4] == ["0/2", "not run"]      # baseline only
+    assert _row(md, "scaffolded transfer", 15)[2:4] == ["0/2", "not run"]
+    rows = list(csv.DictReader(io.StringIO(variant.tables[1].read_text())))
+    assert {r["variant"] for r in rows} == {LAMBDA}
+
+    md = (reports / "table2_rbf.md").read_text()
+    assert "variant" not in md.splitlines()[0]
+    assert _row(md, "without transfer", 0)[2:4] == ["2/2", "12.00 ± 2.00"]
+    assert _row(md, "regular transfer", 15)[2:4] == ["0/2", "not run"]      # variant only
+
+
+def test_a_variant_without_runs_is_one_line_naming_the_variants_that_have_runs(two_sweeps):
+    with pytest.raises(SystemExit) as exit_:
+        reporting_main(reporting_args(two_sweeps, "algorithm.lambda_=0.9"))
+    message = str(exit_.value.code)
+    assert "\n" not in message and message.startswith("error: no runs of the variant algorithm.lambda_=0.9 in ")
+    assert f"runs there: baseline (5 runs), {LAMBDA} (3 runs)" in message
+    assert message.endswith("run the sweep first: python -m mediated_transfer experiment=table2_rbf "
+                            f"scale=smoke paths.root={two_sweeps} tracking=none algorithm.lambda_=0.9")
+
+
+def test_only_variant_runs_is_no_run_of_the_baseline(tmp_path):
+    write_variant(Path(compose_experiment(tmp_path).paths.sweep_dir))
+    with pytest.raises(SystemExit, match=rf"no runs of the baseline in .*\(runs there: {LAMBDA} \(3 runs\)\)"):
+        reporting_main(reporting_args(tmp_path))
+
+
+def test_variant_summaries_in_mlflow_are_apart_from_the_baselines(two_sweeps):
+    uri = fresh_store(two_sweeps / "store")
+    for overrides in ([], [LAMBDA]):
+        args = [a for a in reporting_args(two_sweeps, f"tracking.uri={uri}", *overrides)[1:] if a != "tracking=none"]
+        build_report(compose_report_config("table2_rbf", args))
+    runs = tracking.find_runs(tracking.TrackingSettings(uri), "table2_rbf", f"tags.kind = '{tracking.KIND_SUMMARY}'")
+    assert sorted((r.data.tags["variant"], r.data.tags["cell"]) for r in runs) == [
+        (LAMBDA, "none_0"), (LAMBDA, "regular_15"),
+        ("baseline", "none_0"), ("baseline", "regular_50"), ("baseline", "scaffolded_15")]
+    variant_none = next(r for r in runs if r.data.tags["variant"] == LAMBDA and r.data.tags["cell"] == "none_0")
+    assert variant_none.data.metrics["reward_loss_mean"] == 11.0
+    assert LAMBDA in variant_none.data.tags["mlflow.runName"]
+
+
+def test_compare_writes_one_table_and_one_figure_of_both_sweeps(two_sweeps, capsys):
+    assert compare_main([*reporting_args(two_sweeps), "--variant", LAMBDA]) == 0
+    out = two_sweeps / "reports" / "smoke" / "compare"
+    md, csv_file, png = (out / f"table2_rbf__baseline__vs__{LAMBDA}.{ext}" for ext in ("md", "csv", "png"))
+    assert f"{md}, {csv_file}, {png}" in capsys.readouterr().out
+    rows = {(r["strategy"], r["n_source"]): r for r in csv.DictReader(io.StringIO(csv_file.read_text()))}
+    assert list(rows) == [("none", "0"), ("regular", "15"), ("regular", "50"), ("scaffolded", "15")]
+    none = rows["none", "0"]
+    assert float(none["reward_loss_mean [baseline]"]) == 12.0 and float(none[f"reward_loss_mean [{LAMBDA}]"]) == 11.0
+    assert float(none[f"reward_loss_difference [{LAMBDA}]"]) == -1.0
+    assert rows["regular", "50"][f"runs [{LAMBDA}]"] == "0" and rows["regular", "50"][f"reward_loss_mean [{LAMBDA}]"] == ""
+    assert _row(md.read_text(), "without transfer", 0) == [
+        "without transfer", "0", "2/2", "12.00 ± 2.00", "-", "2/2", "11.00 ± 1.00", "-", "-1.00 ± 2.24"]
+    with Image.open(png) as image:
+        assert image.format == "PNG"
+
+
+def test_compare_of_a_variant_without_runs_names_the_variants_present(two_sweeps):
+    with pytest.raises(SystemExit, match=rf"^error: no runs of the variant algorithm.lambda_=0.9 .*{LAMBDA} \(3 runs\)"):
+        compare_main([*reporting_args(two_sweeps), "--variant", "algorithm.lambda_=0.9"])
+
+
+# --- the command line: one-line errors, each line once -----------------------------------------
+
+
+def test_a_mistyped_scale_is_a_one_line_error_with_exit_code_1():
+    done = subprocess.run([sys.executable, "-m", "mediated_transfer.reporting", "experiment=table2_rbf", "scale=smok"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1 and done.stdout == ""
+    assert done.stderr == "error: scale=smok: no such option; allowed: paper, quick, smoke\n"
+
+
+def test_an_unknown_key_is_a_one_line_error_naming_the_keys_next_to_it():
+    with pytest.raises(SystemExit) as exit_:
+        reporting_main(["experiment=table2_rbf", "scale=smoke", "algorithm.lamda=0.5"])
+    message = str(exit_.value.code)
+    assert "\n" not in message
+    assert message == "error: unknown key 'algorithm.lamda'; did you mean 'algorithm.lambda_'?"
+
+
+def test_each_report_line_is_printed_once(tmp_path, capfd):
+    write_sweep(Path(compose_experiment(tmp_path).paths.sweep_dir))
+    assert reporting_main(reporting_args(tmp_path)) == 0
+    out, err = capfd.readouterr()
+    assert (out + err).count("table2_rbf: 5 runs") == 1 and err == ""
+
+
+def test_every_experiment_reports_the_variant_where_it_applies_and_says_where_not(two_sweeps, capsys):
+    # algorithm.lambda_ is a key of linear Q(lambda) (Tables II, III), not of the DQN (Table IV).
+    assert reporting_main(reporting_args(two_sweeps, LAMBDA)[1:]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith(f"table2_rbf [{LAMBDA}]: 3 runs -> ") and out.count("\n") == 1
+    assert "skipped: table3_fsr: no runs of the variant" in err
+    assert "skipped: table4_dnn: unknown key 'algorithm.lambda_'; keys here: learning_rate, gamma" in err
+
+
+def test_runs_of_other_code_are_reported_stale_with_how_to_recompute(tmp_path, capsys):
+    cfg = compose_experiment(tmp_path, "tracking=none")
+    write_sweep(Path(cfg.paths.sweep_dir))
+    folder = Path(cfg.paths.sweep_dir) / "regular_50" / "seed=1"
+    stale = RunResult.read(folder)
+    stale.code = {**stale.code, "commit": "f" * 40, "digest": "0" * 16}  # as if other code wrote it
+    stale.write(folder)
+    assert reporting_main(reporting_args(tmp_path)) == 0
+    out, err = capsys.readouterr()
+    assert "table2_rbf: 5 runs (1 stale) -> " in out
+    assert "regular_50 seed=1: computed by other code: commit ffffffffff" in err and "rerun_stale=true" in err
+    md = (Path(cfg.paths.reports_dir) / "table2_rbf.md").read_text()
+    assert "1 of the runs were computed by other code than the current" in md

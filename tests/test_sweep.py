@@ -198,3 +198,39 @@ def test_a_result_of_other_code_is_reported_stale_and_recomputed_on_request(root
 
     _run_cli(*args, "rerun_stale=true")
     assert RunResult.read(folder).stale() is None  # recomputed by this code
+
+
+def test_a_variant_sweep_is_reported_apart_from_the_baseline_and_compared_with_it(root, source_cache, capsys):
+    from mediated_transfer.reporting.compare import main as compare_main
+
+    common = [*_common(root, source_cache), "experiment=table2_rbf", "cell=none_0,regular_1"]
+    _run_cli(*common, "hydra/launcher=basic")
+    _run_cli(*common, "algorithm.lambda_=0.5", "hydra/launcher=basic")
+    sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
+    variant = "algorithm.lambda_=0.5"
+    assert set(_results(sweep_dir)) == {"none_0/seed=0", "regular_1/seed=0"}
+    assert {p.parent.relative_to(sweep_dir).as_posix() for p in sweep_dir.glob(f"*/seed=*/{variant}/result.json")} \
+        == {f"none_0/seed=0/{variant}", f"regular_1/seed=0/{variant}"}
+
+    report_args = [a for a in common if not a.startswith("cell=")]
+    assert reporting_main(report_args) == 0
+    assert reporting_main([*report_args, variant]) == 0
+    out = capsys.readouterr().out
+    assert "table2_rbf: 2 runs -> " in out and f"table2_rbf [{variant}]: 2 runs -> " in out
+    baseline_md = (root / "reports" / "smoke" / "table2_rbf.md").read_text()
+    variant_md = (root / "reports" / "smoke" / "variants" / variant / "table2_rbf.md").read_text()
+    assert variant not in baseline_md and f"`{variant}`" in variant_md
+    for md, folder in ((baseline_md, ""), (variant_md, variant)):
+        loss = RunResult.read(sweep_dir / "none_0" / "seed=0" / folder).reward_loss
+        assert f"| without transfer | 0 | 1/1 | {loss:.2f} ± n/a |" in md  # exactly this sweep's run
+
+    runs = tracking.find_runs(_settings(root), "table2_rbf", "tags.kind = 'run'")
+    assert sorted(r.data.tags["variant"] for r in runs) == ["algorithm.lambda_=0.5"] * 2 + ["baseline"] * 2
+    assert {r.info.run_name for r in runs if r.data.tags["variant"] != "baseline"} == {
+        f"none_0/seed=0 [{variant}]", f"regular_1/seed=0 [{variant}]"}
+
+    assert compare_main([*report_args, "--variant", variant]) == 0
+    [table] = (root / "reports" / "smoke" / "compare").glob("*.md")
+    text = table.read_text()
+    assert "baseline" in text and variant in text
+    assert list((root / "reports" / "smoke" / "compare").glob("*.png"))

@@ -96,9 +96,10 @@ def one_line(error: BaseException) -> str:
     if isinstance(error, MissingConfigException):
         missing = str(error.missing_cfg_file or "")
         group, _, option = missing.rpartition("/")
-        allowed = ", ".join(error.options or [])
+        # Numbers (n_source) in numeric order, names alphabetically.
+        options = sorted(error.options or [], key=lambda o: (not o.isdigit(), int(o) if o.isdigit() else 0, o))
         if group:
-            return f"{group}={option} is not an option of '{group}'; allowed: {allowed}"
+            return f"{group}={option}: no such option; allowed: {', '.join(options)}"
         return _first_line(str(error))
     text = _first_line(str(error))
     cause = error.__cause__ or error.__context__
@@ -135,7 +136,7 @@ def check_known_keys(cfg: DictConfig) -> None:
 def _unknown_key_message(key: str, allowed: list[str]) -> str:
     path, _, name = key.rpartition(".")
     prefix = f"{path}." if path else ""
-    nearest = difflib.get_close_matches(name, allowed, n=1, cutoff=0.5)
+    nearest = difflib.get_close_matches(name, allowed, n=1, cutoff=0.7)
     hint = f"did you mean '{prefix}{nearest[0]}'?" if nearest else f"keys here: {', '.join(allowed)}"
     return f"unknown key '{key}'; {hint}"
 

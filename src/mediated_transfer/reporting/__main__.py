@@ -1,59 +1,45 @@
 """``python -m mediated_transfer.reporting [experiment=table2_rbf,...] [scale=quick] [overrides]``
 
 Builds the tables and figures of the given experiments (default: every experiment in
-conf/experiment/) from the outputs of their sweeps. Overrides are the ones the sweep was run
-with (scale, paths.root, tracking, ...), so that the same config locates the same outputs.
+conf/experiment/ that has runs) from the outputs of their sweeps. Overrides are the ones the
+sweep was run with (scale, paths.root, tracking, ...), so that the same config locates the same
+outputs; overrides that change what a run computes (e.g. algorithm.lambda_=0.5) name a variant,
+whose runs alone are reported, into <paths.reports_dir>/variants/<variant>/.
+Compare sweeps side by side with python -m mediated_transfer.reporting.compare.
 """
 
 from __future__ import annotations
 
-import logging
 import sys
 from collections.abc import Sequence
 
-from ..config.compose import CONF_DIR, CONFIG_NAME, prepare_overrides as quote_numeric_choices
-from .build import Report, build_report
+from .build import NoRuns, Report, build_report
+from .compose import USER_ERRORS, ReportError, compose_experiment, experiment_names, one_line, split_experiments
 
 USAGE = __doc__
 
 
-def experiments_of(overrides: Sequence[str]) -> tuple[list[str], list[str]]:
-    """(experiment names, the other overrides); all of conf/experiment/ when none is named."""
-    names, rest = [], []
-    for arg in overrides:
-        if arg.startswith("experiment="):
-            names += [n for n in arg.split("=", 1)[1].split(",") if n]
-        else:
-            rest.append(arg)
-    available = sorted(p.stem for p in (CONF_DIR / "experiment").glob("*.yaml"))
-    unknown = sorted(set(names) - set(available))
-    if unknown:
-        raise SystemExit(f"unknown experiment {', '.join(unknown)}; allowed: {', '.join(available)}")
-    return names or available, rest
-
-
-def build(overrides: Sequence[str]) -> list[Report]:
+def build(overrides: Sequence[str]) -> tuple[list[Report], list[str]]:
     """Reports of the named experiments (an error if one has no runs yet), or of every
-    experiment that has runs when none is named (an error only if none has)."""
-    from hydra import compose, initialize_config_dir
-
-    named = any(a.startswith("experiment=") for a in overrides)
-    names, rest = experiments_of(overrides)
-    reports, missing = [], []
-    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
-        for name in names:
-            cfg = compose(CONFIG_NAME, overrides=[f"experiment={name}", *quote_numeric_choices(rest)])
-            try:
-                reports.append(build_report(cfg))
-            except FileNotFoundError as error:
-                if named:
-                    raise
-                missing.append(str(error))
+    experiment that has runs when none is named (an error only if none has); and one line per
+    experiment skipped: no runs, or the overrides do not apply to it (algorithm.lambda_ is not
+    a key of the DQN experiment)."""
+    named, rest = split_experiments(overrides)
+    names = named or experiment_names()
+    reports, skipped = [], []
+    for name in names:
+        try:
+            reports.append(build_report(compose_experiment(name, rest)))
+        except (NoRuns, ReportError) as error:
+            if named:
+                raise
+            skipped.append((name, error))
     if not reports:
-        raise FileNotFoundError("\n".join(missing))
-    for message in missing:
-        print(f"skipped: {message}", file=sys.stderr)
-    return reports
+        first_name, first = skipped[0]
+        if not any(isinstance(error, NoRuns) for _, error in skipped):
+            raise first  # the overrides compose for no experiment (e.g. scale=smok): one error says it
+        raise NoRuns(f"none of {', '.join(names)} has runs; {first_name}: {first}")
+    return reports, [f"{name}: {error}" for name, error in skipped]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -61,15 +47,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     if any(a in ("-h", "--help") for a in args):
         print(USAGE)
         return 0
-    logging.basicConfig(level=logging.INFO, format="%(message)s")
     try:
-        reports = build(args)
-    except (FileNotFoundError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 1
+        reports, skipped = build(args)
+    except USER_ERRORS as error:
+        raise SystemExit(f"error: {one_line(error)}") from None
+    for message in skipped:
+        print(f"skipped: {message}", file=sys.stderr)
     for report in reports:
-        files = [*map(str, report.tables), *([str(report.figure)] if report.figure else [])]
-        print(f"{report.name}: {report.runs} runs -> {', '.join(files)}")
+        print(report.line())
+        if report.stale:
+            print(f"  stale, computed by other code than the current: {'; '.join(report.stale[:3])}"
+                  f"{' ...' if len(report.stale) > 3 else ''}; recompute them: rerun the sweep with "
+                  "rerun_stale=true", file=sys.stderr)
     return 0
 
 

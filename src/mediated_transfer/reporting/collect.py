@@ -1,8 +1,10 @@
 """Read the finished runs of a sweep, grouped by table cell: the input of every table and figure.
 
-A table sweep leaves ``<sweep_dir>/<cell>/seed=<k>/result.json`` per finished run (conf/config.yaml:
-hydra.sweep.subdir). Runs of variants (extra swept keys) sit one folder deeper and are not part
-of the table. Unfinished runs have no result.json and are simply not there yet.
+A table sweep leaves ``<sweep_dir>/<cell>/seed=<k>/result.json`` per finished run of the baseline
+and ``<sweep_dir>/<cell>/seed=<k>/<variant>/result.json`` per finished run of a variant, where
+the variant is Hydra's override_dirname of the run (its overrides besides table cell, seed, scale
+and locations; conf/config.yaml: hydra.sweep.subdir). A report reads one variant only, so the
+baseline and its variants never mix. Unfinished runs have no result.json and are not there yet.
 """
 
 from __future__ import annotations
@@ -14,6 +16,13 @@ import numpy as np
 
 from ..metrics import MetricsConfig, summarise_runs
 from ..results import RESULT_FILE, RunResult
+
+BASELINE = ""
+"""The variant of a sweep run with no overrides beyond table cell, seed and locations."""
+
+
+def variant_label(variant: str) -> str:
+    return variant or "baseline"
 
 
 @dataclass
@@ -40,8 +49,8 @@ class CellRuns:
 
 def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
                   representation: str | None = None, budget: int | None = None,
-                  eval_points: int | None = None) -> dict[str, CellRuns]:
-    """The finished runs under ``sweep_dir`` by cell name, runs sorted by seed.
+                  eval_points: int | None = None, variant: str = BASELINE) -> dict[str, CellRuns]:
+    """The finished runs of ``variant`` under ``sweep_dir`` by cell name, runs sorted by seed.
 
     With ``algorithm``/``representation``/``budget``/``eval_points`` given, a run of another
     learner, budget or evaluation schedule in the folder is an error (it would silently mix into
@@ -50,9 +59,11 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
     """
     sweep_dir = Path(sweep_dir)
     cells: dict[str, CellRuns] = {}
-    for path in sorted(sweep_dir.glob(f"*/seed=*/{RESULT_FILE}")):
-        result = RunResult.read(path.parent)
-        folder = path.parent
+    for seed_dir in sorted(sweep_dir.glob("*/seed=*")):
+        folder = seed_dir / variant
+        if not (folder / RESULT_FILE).is_file():
+            continue
+        result = RunResult.read(folder)
         expected = {"algorithm": algorithm, "representation": representation, "budget": budget}
         for key, wanted in expected.items():
             if wanted is not None and getattr(result, key) != wanted:
@@ -62,7 +73,7 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             raise ValueError(f"{folder}: {len(result.steps)} evaluation points, but this table "
                              f"expects eval_points={eval_points}; the folder belongs to another sweep")
         cell_name = f"{result.strategy}_{result.n_source}"
-        if folder.parent.name != cell_name or folder.name != f"seed={result.seed}":
+        if seed_dir.parent.name != cell_name or seed_dir.name != f"seed={result.seed}":
             raise ValueError(f"{folder} holds the run {cell_name} seed={result.seed}: "
                              "the folder does not match its content")
         cell = cells.setdefault(cell_name, CellRuns(result.strategy, result.n_source))
@@ -73,3 +84,13 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
     for cell in cells.values():
         cell.results.sort(key=lambda r: r.seed)
     return cells
+
+
+def runs_per_variant(sweep_dir: str | Path) -> dict[str, int]:
+    """How many finished runs each variant (baseline: '') has under ``sweep_dir``, baseline first."""
+    sweep_dir = Path(sweep_dir)
+    counts: dict[str, int] = {}
+    for path in sweep_dir.glob(f"*/seed=*/**/{RESULT_FILE}"):
+        variant = "/".join(path.relative_to(sweep_dir).parts[2:-1])
+        counts[variant] = counts.get(variant, 0) + 1
+    return dict(sorted(counts.items()))

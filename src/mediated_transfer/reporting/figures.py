@@ -1,5 +1,6 @@
 """Figures 3-5: learning curves of regular learning (without transfer) against the fastest
 transfer variant of the same learner, mean over runs with SEM bands, and the threshold line.
+And the comparison of sweeps: reward loss L_R per table cell, a bar per sweep.
 
 "Fastest" is decided on the measured data, as the paper did on its own: the transfer cell
 whose mean curve reaches the threshold first (time to threshold); ties, and cells that never
@@ -44,14 +45,19 @@ def cell_label(strategy: str, n_source: int, n_runs: int) -> str:
     return f"{what} ({n_runs} run{'' if n_runs == 1 else 's'})"
 
 
-def plot_curves(curves: list[Curve], threshold: float, max_reward: float, title: str,
-                subtitle: str, path: str | Path) -> Path:
-    """Mean <R> over learning steps with +/- SEM bands, the threshold as a dashed line."""
+def _pyplot():
     import matplotlib
 
     matplotlib.use("Agg")  # files only, no display
     import matplotlib.pyplot as plt
 
+    return plt
+
+
+def plot_curves(curves: list[Curve], threshold: float, max_reward: float, title: str,
+                subtitle: str, path: str | Path) -> Path:
+    """Mean <R> over learning steps with +/- SEM bands, the threshold as a dashed line."""
+    plt = _pyplot()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(7.0, 4.2), dpi=120)
@@ -76,6 +82,47 @@ def plot_curves(curves: list[Curve], threshold: float, max_reward: float, title:
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     # No timestamp in the file: the same data gives the same bytes.
+    fig.savefig(path, metadata={"Software": None})
+    plt.close(fig)
+    return path
+
+
+@dataclass(frozen=True)
+class Bars:
+    label: str
+    """The sweep: 'baseline' or its variant."""
+    mean: list[float]
+    """L_R per table cell; nan where the sweep has no runs of the cell."""
+    sem: list[float]
+    """nan for a single run (no error bar)."""
+
+
+def plot_loss_bars(cells: list[str], bars: list[Bars], title: str, subtitle: str, path: str | Path) -> Path:
+    """Grouped bars: per table cell, one bar per sweep (L_R mean, SEM as error bar)."""
+    plt = _pyplot()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.0 + len(cells) * (0.3 + 0.3 * len(bars))), 4.2), dpi=120)
+    width = 0.8 / len(bars)
+    for i, sweep in enumerate(bars):
+        # Only the cells this sweep ran: a missing bar must not read as L_R = 0.
+        ran = [k for k, m in enumerate(sweep.mean) if not math.isnan(m)]
+        x = np.array(ran) - 0.4 + width * (i + 0.5)
+        sem = np.array([sweep.sem[k] for k in ran])
+        # A single run has no SEM (nan): its bar gets no error bar, not a zero-length one.
+        ax.bar(x, [sweep.mean[k] for k in ran], width, color=f"C{i}", label=sweep.label,
+               yerr=sem, error_kw={"elinewidth": 1, "capsize": 2})
+        for k in sorted(set(range(len(cells))) - set(ran)):
+            ax.text(k - 0.4 + width * (i + 0.5), 0, "not run", rotation=90, ha="center", va="bottom",
+                    fontsize=7, color=f"C{i}")
+    ax.set_xticks(range(len(cells)), cells, rotation=30, ha="right", fontsize=8)
+    ax.set_xlim(-0.6, len(cells) - 0.4)
+    ax.set_xlabel("table cell (scheme, N_source)")
+    ax.set_ylabel("reward loss L_R (mean +/- SEM)")
+    ax.set_title("\n".join([*textwrap.wrap(title, 75), *textwrap.wrap(subtitle, 75)]), fontsize=9)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
     fig.savefig(path, metadata={"Software": None})
     plt.close(fig)
     return path

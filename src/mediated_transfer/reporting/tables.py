@@ -1,19 +1,20 @@
 """Tables II-IV from run outputs: each row as in the paper (scheme, N_source, L_R mean +/- SEM,
 time to threshold), the paper's values beside it, the number of runs and the scale stated.
 
-Written as Markdown (to read), CSV (to process) and LaTeX (booktabs, to typeset). The measured
-time to threshold is that of the mean curve, as in the paper; the median of the per-run values
-and how many runs reach the threshold stand next to it.
+One pandas DataFrame of texts per table is written as Markdown and LaTeX, one of numbers as CSV
+(formats.py). The measured time to threshold is that of the mean curve, as in the paper; the
+median of the per-run values and how many runs reach the threshold stand next to it.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import pandas as pd
+
+from .formats import LATEX, MARKDOWN, Markup, write_csv, write_latex, write_markdown
 from .paper import SCHEMES, PaperRow
 
 
@@ -46,16 +47,37 @@ class TableHeader:
     runs_per_row: int
     threshold: float
     max_reward: float
+    variant: str = ""
+    """The overrides of this sweep (Hydra's override_dirname); '' for the baseline."""
+    stale_runs: int = 0
+    """Runs computed by other code than the current (provenance.py); said in the header."""
 
-    def describe(self) -> str:
-        text = (f"Scale `{self.scale}`: {self.budget:,} learning steps per run; <R> at "
+    def heading(self, m: Markup) -> str:
+        title = m.text(self.title)
+        return f"{title}, variant {m.code(self.variant)}" if self.variant else title
+
+    def describe(self, m: Markup) -> str:
+        text = (f"Scale {m.code(self.scale)}: {self.budget:,} learning steps per run; {m.reward} at "
                 f"{self.eval_points} evaluation points x {self.eval_episodes} target-task episodes; "
-                f"{self.runs_per_row} runs (seeds) per row. L_R sums R_max - <R> over the "
-                f"{self.eval_points} points (0 to {self.eval_points * self.max_reward:g}).")
+                f"{self.runs_per_row} runs (seeds) per row. {m.reward_loss} sums {m.max_reward} - "
+                f"{m.reward} over the {self.eval_points} points (0 to {self.eval_points * self.max_reward:g}).")
+        if self.variant:
+            text += (f" Variant {m.code(self.variant)}: the experiment's config with these overrides; "
+                     "only the runs of this variant.")
+        if self.stale_runs:
+            text += (f" {self.stale_runs} of the runs were computed by other code than the current "
+                     f"(stale; rerun the sweep with rerun_stale=true to recompute them).")
         if self.scale != "paper":
             text += (" This is not the paper's scale (500,000 steps, 25 x 100, 20 runs): the "
                      "numbers are not comparable with the paper's.")
         return text
+
+    def threshold_note(self, m: Markup) -> str:
+        success = m.text(f"{self.threshold / self.max_reward:.0%}")
+        return (f"Time to threshold: learning steps until the mean curve over runs stays at "
+                f"{m.reward} {m.geq} {self.threshold:g} ({success} success) to the end; '-': never. "
+                f"Per-run median: the same per run (a run that never reaches it counts as slowest), "
+                f"with the number of runs that reach it.")
 
 
 def table_rows(summaries: dict[str, dict], strategies: dict[str, tuple[str, int]],
@@ -75,106 +97,67 @@ def write_tables(rows: list[TableRow], header: TableHeader, out_dir: str | Path,
     """``<out_dir>/<name>.md``, ``.csv`` and ``.tex``; returns the three paths."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    files = {
-        out_dir / f"{name}.md": markdown(rows, header),
-        out_dir / f"{name}.csv": csv_text(rows, header),
-        out_dir / f"{name}.tex": latex(rows, header),
-    }
-    for path, text in files.items():
-        path.write_text(text)
-    return list(files)
+    preamble = [header.heading(MARKDOWN), header.describe(MARKDOWN), header.threshold_note(MARKDOWN)]
+    caption = " ".join([f"{header.heading(LATEX)}.", header.describe(LATEX), header.threshold_note(LATEX)])
+    return [
+        write_markdown(shown(rows, MARKDOWN), out_dir / f"{name}.md", preamble, ["left"] + ["right"] * 7),
+        write_csv(numbers(rows, header), out_dir / f"{name}.csv"),
+        write_latex(shown(rows, LATEX), out_dir / f"{name}.tex", "lrrrrrrr", caption),
+    ]
 
 
-# --- formats -----------------------------------------------------------------------------------
+def shown(rows: list[TableRow], m: Markup) -> pd.DataFrame:
+    """The table as read: one text per cell, headed as in the paper."""
+    heads = ["Scheme", m.n_source, "Runs", m.reward_loss,
+             "Time to threshold", "Per-run median (reached)", f"{m.reward_loss} (paper)",
+             "Time to threshold (paper)"]
+    return pd.DataFrame([_texts(r, m) for r in rows], columns=heads)
 
-COLUMNS = ["Scheme", "N_source", "Runs", "L_R", "Time to threshold", "Per-run median (reached)",
-           "L_R (paper)", "Time to threshold (paper)"]
 
-
-def _cells(row: TableRow, approx: str, pm: str) -> list[str]:
+def _texts(row: TableRow, m: Markup) -> list[str]:
     s, p = row.summary, row.paper
     measured = ["not run", "", ""] if s is None else [
-        _loss(s["reward_loss_mean"], s["reward_loss_sem"], pm),
-        _steps(s["time_to_threshold"]),
-        f"{_steps(s['time_to_threshold_median'])} ({s['runs_reaching_threshold']}/{s['n_runs']})",
+        reward_loss_text(s["reward_loss_mean"], s["reward_loss_sem"], m),
+        steps_text(s["time_to_threshold"]),
+        f"{steps_text(s['time_to_threshold_median'])} ({s['runs_reaching_threshold']}/{s['n_runs']})",
     ]
     published = ["", ""] if p is None else [
-        f"{p.reward_loss_mean:g} {pm} {p.reward_loss_sem:.2f}",
-        "-" if p.time_to_threshold is None else f"{approx}{p.time_to_threshold:,}",
+        f"{p.reward_loss_mean:g} {m.pm} {p.reward_loss_sem:.2f}",
+        "-" if p.time_to_threshold is None else f"{m.approx}{p.time_to_threshold:,}",
     ]
     return [SCHEMES[row.strategy], str(row.n_source), f"{row.n_runs}/{row.expected_runs}",
             *measured, *published]
 
 
-def markdown(rows: list[TableRow], header: TableHeader) -> str:
-    lines = [f"# {header.title}", "", header.describe(), "",
-             _threshold_note(header), "",
-             "| " + " | ".join(COLUMNS) + " |",
-             "|" + "|".join(["---", "---:", "---:", "---:", "---:", "---:", "---:", "---:"]) + "|"]
-    lines += ["| " + " | ".join(_cells(r, "~", "±")) + " |" for r in rows]
-    return "\n".join(lines) + "\n"
-
-
-def csv_text(rows: list[TableRow], header: TableHeader) -> str:
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow([
-        "scheme", "strategy", "n_source", "scale", "budget", "eval_points", "eval_episodes",
-        "runs", "expected_runs", "reward_loss_mean", "reward_loss_sem", "time_to_threshold",
-        "time_to_threshold_median", "runs_reaching_threshold", "final_reward_mean",
-        "paper_reward_loss_mean", "paper_reward_loss_sem", "paper_time_to_threshold",
-    ])
+def numbers(rows: list[TableRow], header: TableHeader) -> pd.DataFrame:
+    """The table as processed: one number per cell (empty: not run, or never reached)."""
+    records = []
     for r in rows:
         s, p = r.summary or {}, r.paper
-        writer.writerow([
-            SCHEMES[r.strategy], r.strategy, r.n_source, header.scale, header.budget,
-            header.eval_points, header.eval_episodes, r.n_runs, r.expected_runs,
-            _num(s.get("reward_loss_mean")), _num(s.get("reward_loss_sem")),
-            _num(s.get("time_to_threshold")), _num(s.get("time_to_threshold_median")),
-            _num(s.get("runs_reaching_threshold")), _num(s.get("final_reward_mean")),
-            _num(p and p.reward_loss_mean), _num(p and p.reward_loss_sem),
-            _num(p and p.time_to_threshold),
-        ])
-    return out.getvalue()
+        records.append({
+            "scheme": SCHEMES[r.strategy], "strategy": r.strategy, "n_source": r.n_source,
+            "scale": header.scale, "variant": header.variant, "budget": header.budget,
+            "eval_points": header.eval_points, "eval_episodes": header.eval_episodes,
+            "runs": r.n_runs, "expected_runs": r.expected_runs,
+            "reward_loss_mean": s.get("reward_loss_mean"), "reward_loss_sem": s.get("reward_loss_sem"),
+            "time_to_threshold": s.get("time_to_threshold"),
+            "time_to_threshold_median": s.get("time_to_threshold_median"),
+            "runs_reaching_threshold": s.get("runs_reaching_threshold"),
+            "final_reward_mean": s.get("final_reward_mean"),
+            "paper_reward_loss_mean": p and p.reward_loss_mean, "paper_reward_loss_sem": p and p.reward_loss_sem,
+            "paper_time_to_threshold": p and p.time_to_threshold,
+        })
+    frame = pd.DataFrame.from_records(records)
+    # Learning steps and counts are integers; nullable, so that "never" and "not run" stay empty.
+    counts = ["time_to_threshold", "runs_reaching_threshold", "paper_time_to_threshold"]
+    return frame.astype({c: "Int64" for c in counts}).astype({c: "Float64" for c in (
+        "reward_loss_mean", "reward_loss_sem", "time_to_threshold_median", "final_reward_mean",
+        "paper_reward_loss_mean", "paper_reward_loss_sem")})
 
 
-def latex(rows: list[TableRow], header: TableHeader) -> str:
-    heads = ["Scheme", r"$N_\mathrm{source}$", "Runs", r"$\mathcal{L}_R$", "Time to threshold",
-             "Per-run median (reached)", r"$\mathcal{L}_R$ (paper)", "Time to threshold (paper)"]
-    body = [" & ".join(_tex(c) for c in _cells(r, "\x02", "\x01")) + r" \\" for r in rows]
-    caption = _tex(f"{header.title}. {header.describe()} {_threshold_note(header)}")
-    return "\n".join([
-        r"% Generated by python -m mediated_transfer.reporting; needs \usepackage{booktabs}.",
-        r"\begin{table}[t]", r"\centering", r"\small",
-        r"\begin{tabular}{lrrrrrrr}", r"\toprule", " & ".join(heads) + r" \\", r"\midrule",
-        *body, r"\bottomrule", r"\end{tabular}", rf"\caption{{{caption}}}", r"\end{table}", "",
-    ])
+def reward_loss_text(mean: float, sem: float, m: Markup) -> str:
+    return f"{mean:.2f} {m.pm} {'n/a' if math.isnan(sem) else f'{sem:.2f}'}"
 
 
-def _threshold_note(header: TableHeader) -> str:
-    return (f"Time to threshold: learning steps until the mean curve over runs stays at "
-            f"<R> >= {header.threshold:g} ({header.threshold / header.max_reward:.0%} success) to the "
-            f"end; '-': never. Per-run median: the same per run (a run that never reaches it "
-            f"counts as slowest), with the number of runs that reach it.")
-
-
-def _loss(mean: float, sem: float, pm: str) -> str:
-    return f"{mean:.2f} {pm} {'n/a' if math.isnan(sem) else f'{sem:.2f}'}"
-
-
-def _steps(value) -> str:
+def steps_text(value) -> str:
     return "-" if value is None else f"{int(round(value)):,}"
-
-
-def _num(value) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return ""
-    return f"{value:g}" if isinstance(value, float) else str(value)
-
-
-def _tex(text: str) -> str:
-    for raw, escaped in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"),
-                         ("#", r"\#"), ("<R>", r"$\langle R\rangle$"), (">=", r"$\geq$"),
-                         ("`", ""), ("\x01", r"$\pm$"), ("\x02", r"$\approx$ ")):
-        text = text.replace(raw, escaped)
-    return text
