@@ -105,7 +105,8 @@ class _SourcePhase:
 
 
 class NoTransfer:
-    """No source phase: every episode learns the target task."""
+    """``strategy=none`` (conf/strategy/none.yaml). No source phase: every episode learns the
+    target task."""
 
     name = "none"
     in_source_phase = False
@@ -121,7 +122,8 @@ class NoTransfer:
 
 
 class RegularTransfer(_SourcePhase):
-    """Algorithm 1: a uniformly random task from C each episode, removed from C when solved."""
+    """``strategy=regular`` (conf/strategy/regular.yaml). Algorithm 1: a uniformly random task
+    from C each episode, removed from C when solved."""
 
     name = "regular"
 
@@ -130,7 +132,8 @@ class RegularTransfer(_SourcePhase):
 
 
 class ScaffoldedTransfer(_SourcePhase):
-    """Algorithm 2: the unsolved task most cosine-similar (eq. 3) to a random solved one.
+    """``strategy=scaffolded`` (conf/strategy/scaffolded.yaml). Algorithm 2: the unsolved task
+    most cosine-similar (eq. 3) to a random solved one.
 
     Ties in similarity go to the lowest task index. ``sensors`` holds the tasks' sensor
     vectors s, one row per task, in the order of ``tasks``.
