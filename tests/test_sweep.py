@@ -234,3 +234,23 @@ def test_a_variant_sweep_is_reported_apart_from_the_baseline_and_compared_with_i
     text = table.read_text()
     assert "baseline" in text and variant in text
     assert list((root / "reports" / "smoke" / "compare").glob("*.png"))
+
+
+def test_comments_and_docstrings_do_not_make_results_stale(tmp_path):
+    from mediated_transfer.provenance import PACKAGE, source_digest
+
+    for entry in ("env", "learners", "transfer", "run.py", "metrics.py", "results.py"):
+        source = PACKAGE / entry
+        target = tmp_path / entry
+        if source.is_dir():
+            for file in source.rglob("*.py"):
+                (target / file.relative_to(source)).parent.mkdir(parents=True, exist_ok=True)
+                (target / file.relative_to(source)).write_text(file.read_text())
+        else:
+            target.write_text(source.read_text())
+    assert source_digest(tmp_path) == source_digest()
+    run = tmp_path / "run.py"
+    run.write_text(run.read_text().replace('"""One learning run', '"""A learning run') + "\n# a comment\n")
+    assert source_digest(tmp_path) == source_digest()
+    run.write_text(run.read_text().replace("step += 1", "step += 2"))
+    assert source_digest(tmp_path) != source_digest()

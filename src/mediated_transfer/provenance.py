@@ -1,7 +1,7 @@
 """Which code computed a result, and whether a stored result is stale.
 
 Every result records the git commit and whether the working tree was dirty (for people), and a
-digest of the source files that compute a run (for the staleness check): the world, the
+digest of the code of the source files that compute a run (for the staleness check): the world, the
 learners, the transfer strategies, the run loop and the metrics. A change to reporting,
 tracking, docs or configs does not make results stale; a change to anything a curve depends
 on does. Results of an older results format are stale too.
@@ -9,6 +9,7 @@ on does. Results of an older results format are stale too.
 
 from __future__ import annotations
 
+import ast
 import functools
 import hashlib
 import subprocess
@@ -30,14 +31,27 @@ def code_version() -> dict[str, Any]:
 
 
 def source_digest(package: Path = PACKAGE) -> str:
+    """Digest of the computing sources' syntax trees: comments, docstrings and layout do not
+    change what a run computes, so they do not change the digest."""
     digest = hashlib.sha256()
     for entry in COMPUTING_SOURCES:
         path = package / entry
         files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
         for file in files:
             digest.update(file.relative_to(package).as_posix().encode())
-            digest.update(file.read_bytes())
+            digest.update(_code_of(file.read_text()).encode())
     return digest.hexdigest()[:16]
+
+
+def _code_of(source: str) -> str:
+    tree = ast.parse(source)
+    # Docstrings, of modules, classes, functions and fields, are string statements: drop them.
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(body, list):
+            node.body = [n for n in body if not (isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant)
+                                                 and isinstance(n.value.value, str))] or [ast.Pass()]
+    return ast.dump(tree, annotate_fields=False)
 
 
 def staleness(recorded: dict[str, Any] | None, results_format: int | None) -> str | None:
