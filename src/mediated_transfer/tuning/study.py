@@ -39,6 +39,8 @@ HEARTBEAT_S = 15
 """A running trial writes a heartbeat this often ..."""
 GRACE_S = 60
 """... and counts as dead (failed, then queued again) after this long without one."""
+POLL_S = 5
+"""A worker with nothing to start checks this often whether the others' trials finished or died."""
 MAX_RETRIES = 3
 """A trial is redone at most this often (a trial that keeps failing is a bug to look at)."""
 DEFAULTS, RANDOM = "defaults", "random"
@@ -180,7 +182,7 @@ def work(plan: StudyPlan) -> None:
         if counts[TrialState.COMPLETE] >= plan.trials:
             return
         if counts[TrialState.WAITING] == 0 and counts[TrialState.COMPLETE] + counts[TrialState.RUNNING] >= plan.trials:
-            time.sleep(HEARTBEAT_S)
+            time.sleep(POLL_S)
             continue
         study.optimize(objective(plan.space), n_trials=1,
                        callbacks=[lambda s, t: after_trial(plan, s, t, started)])
