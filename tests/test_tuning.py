@@ -6,6 +6,7 @@ in one line naming the key."""
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import time
 from pathlib import Path
@@ -162,3 +163,12 @@ def test_every_search_space_loads_and_tunes_without_transfer_on_tuning_seeds():
         assert space.scale == "paper" and "strategy=none" in space.base
         for p in space.params:
             assert p.why
+
+
+def test_a_study_refuses_to_continue_with_another_search_space(tmp_path):
+    space = find_search_space("rbf").with_scale("smoke")
+    folder = study_folder(tmp_path, space)
+    study_module.prepare(StudyPlan(space, folder, trials=1))
+    other = dataclasses.replace(space, seeds=(1000, 1001))
+    with pytest.raises(study_module.StudyMismatchError, match=r"another search space \(seeds differ"):
+        study_module.prepare(StudyPlan(other, folder, trials=1))

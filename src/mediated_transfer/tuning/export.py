@@ -9,7 +9,11 @@ Also: a consistent copy of a study's SQLite database while workers keep writing 
 
 from __future__ import annotations
 
+import argparse
 import sqlite3
+import sys
+from collections.abc import Sequence
+from contextlib import closing
 from pathlib import Path
 
 import pandas as pd
@@ -54,6 +58,37 @@ def backup_database(source: Path, target: Path) -> Path:
     """A consistent copy of the SQLite file ``source`` (SQLite's online backup), e.g. to commit."""
     target = Path(target)
     target.parent.mkdir(parents=True, exist_ok=True)
-    with sqlite3.connect(source) as src, sqlite3.connect(target) as dst:
+    with closing(sqlite3.connect(source)) as src, closing(sqlite3.connect(target)) as dst:
         src.backup(dst)
     return target
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m mediated_transfer.tuning.export LEARNER [--backup FILE]``: rewrite trials.csv
+    from the study (running or not) and optionally write a consistent copy of its database."""
+    from .space import SearchSpaceError, find_search_space
+    from .study import StudyPlan, load_study, study_folder
+
+    parser = argparse.ArgumentParser(prog="python -m mediated_transfer.tuning.export")
+    parser.add_argument("learner")
+    parser.add_argument("--scale", default=None)
+    parser.add_argument("--root", type=Path, default=Path("."))
+    parser.add_argument("--backup", type=Path, default=None, help="where to write the copy of study.db")
+    args = parser.parse_args(argv)
+    try:
+        space = find_search_space(args.learner).with_scale(args.scale)
+    except SearchSpaceError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    folder = study_folder(args.root, space)
+    if not (folder / STUDY_FILE).is_file():
+        print(f"error: no study at {folder / STUDY_FILE}", file=sys.stderr)
+        return 2
+    print(write_trials_csv(load_study(StudyPlan(space, folder, trials=space.trials)), folder))
+    if args.backup is not None:
+        print(backup_database(folder / STUDY_FILE, args.backup))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

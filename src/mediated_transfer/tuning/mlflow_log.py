@@ -75,6 +75,7 @@ def log_trial(settings: tracking.TrackingSettings, parent_id: str, key: str, tri
                     for seed, v in zip(record["seeds"], record[name]) if v is not None]
     params = [Param(k, str(v)) for k, v in trial.params.items()]
     params.append(Param("seeds", ",".join(str(s) for s in record["seeds"])))
+    params.append(Param("budget", str(record["steps"][-1])))
     client.log_batch(run.info.run_id, metrics=metrics, params=params)
     client.set_terminated(run.info.run_id, "FINISHED")  # last: an interrupted run is not FINISHED
     return run.info.run_id

@@ -86,6 +86,7 @@ def storage(folder: Path) -> RDBStorage:
 
 
 def load_study(plan: StudyPlan) -> optuna.Study:
+    optuna.logging.set_verbosity(optuna.logging.WARNING)  # the progress lines say it all
     return optuna.create_study(
         study_name=plan.space.learner,
         storage=storage(plan.folder),
@@ -99,7 +100,6 @@ def prepare(plan: StudyPlan) -> StudyPlan:
     """Once, before the workers start: create or check the study, queue the provisional
     defaults and every interrupted trial, create the MLflow parent run and log any finished
     trial it lacks. Returns the plan with the parent run's id."""
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
     plan.folder.mkdir(parents=True, exist_ok=True)
     study = load_study(plan)
     identity = plan.space.identity()
@@ -172,7 +172,6 @@ def work(plan: StudyPlan) -> None:
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(limits=1)  # one worker, one core
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
     study = load_study(plan)
     started = time.time()
     while True:
