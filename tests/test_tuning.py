@@ -25,25 +25,32 @@ from mediated_transfer.tuning.space import SEARCH_SPACE_DIR, SearchSpaceError, f
 from mediated_transfer.tuning.study import StudyPlan, load_study, study_folder
 from mediated_transfer.tuning.table1 import main as table1
 
+from .test_tracking import fresh_store
+
 SMOKE = ["--scale", "smoke"]
 
 
-def _study(root: Path) -> optuna.Study:
-    space = find_search_space("rbf").with_scale("smoke")
+@pytest.fixture(scope="module")
+def space():
+    """The RBF search space at smoke scale (loading composes a config: done once)."""
+    return find_search_space("rbf").with_scale("smoke")
+
+
+def _study(space, root: Path) -> optuna.Study:
     return load_study(StudyPlan(space, study_folder(root, space), trials=1))
 
 
-def _complete(root: Path) -> list:
-    return _study(root).get_trials(states=(optuna.trial.TrialState.COMPLETE,))
+def _complete(space, root: Path) -> list:
+    return _study(space, root).get_trials(states=(optuna.trial.TrialState.COMPLETE,))
 
 
-def test_search_stores_resumes_tracks_exports_and_builds_table1(tmp_path, capsys):
+def test_search_stores_resumes_tracks_exports_and_builds_table1(space, tmp_path, capsys):
+    fresh_store(tmp_path)  # <root>/mlflow.db, its tables already made (that takes seconds)
     assert tune(["rbf", *SMOKE, "--trials", "2", "--root", str(tmp_path)]) == 0
     folder = tmp_path / "tuning" / "rbf" / "smoke"
     assert (folder / "study.db").is_file()
-    first = _complete(tmp_path)
+    first = _complete(space, tmp_path)
     assert [t.number for t in first] == [0, 1]
-    space = find_search_space("rbf")
     assert first[0].user_attrs["role"] == "defaults" and first[0].params == space.defaults
     assert first[1].user_attrs["role"] == "random"
     record = first[1].user_attrs
@@ -54,11 +61,11 @@ def test_search_stores_resumes_tracks_exports_and_builds_table1(tmp_path, capsys
 
     # Resumed with a larger count: exactly one more trial, the first two untouched.
     assert tune(["rbf", *SMOKE, "--trials", "3", "--root", str(tmp_path)]) == 0
-    again = _complete(tmp_path)
+    again = _complete(space, tmp_path)
     assert [t.number for t in again] == [0, 1, 2]
     assert [t.params for t in again[:2]] == [t.params for t in first]
     assert tune(["rbf", *SMOKE, "--trials", "3", "--root", str(tmp_path)]) == 0
-    assert len(_study(tmp_path).trials) == 3
+    assert len(_study(space, tmp_path).trials) == 3
 
     trials = pd.read_csv(folder / "trials.csv")
     assert list(trials["trial"]) == [0, 1, 2] and list(trials["role"]) == ["defaults", "random", "random"]
@@ -83,9 +90,8 @@ def test_search_stores_resumes_tracks_exports_and_builds_table1(tmp_path, capsys
 
 
 @pytest.mark.filterwarnings("ignore:Heartbeat of storage is supposed to be used with Study.optimize")
-def test_a_trial_whose_worker_died_is_redone_with_its_values(tmp_path, monkeypatch):
+def test_a_trial_whose_worker_died_is_redone_with_its_values(space, tmp_path, monkeypatch):
     monkeypatch.setattr(study_module, "GRACE_S", 1)
-    space = find_search_space("rbf").with_scale("smoke")
     plan = study_module.prepare(StudyPlan(space, study_folder(tmp_path, space), trials=1))
     study = load_study(plan)
     study.ask()  # the queued defaults: pretend a worker takes them
@@ -94,7 +100,7 @@ def test_a_trial_whose_worker_died_is_redone_with_its_values(tmp_path, monkeypat
     time.sleep(2)
     study.tell(0, state=optuna.trial.TrialState.FAIL)  # Ctrl-C: failed without a retry
     assert tune(["rbf", *SMOKE, "--trials", "2", "--root", str(tmp_path), "--tracking", "none"]) == 0
-    done = _complete(tmp_path)
+    done = _complete(space, tmp_path)
     assert len(done) == 2
     assert {t.user_attrs["role"] for t in done} == {"defaults", "random"}
     assert dead.params in [t.params for t in done]
@@ -118,8 +124,7 @@ def test_first_step_at_threshold_and_the_learning_span():
     assert record["first_threshold_step"] == [200, None] and record["learning_span"] == [50, None]
 
 
-def test_trial_k_draws_the_same_values_in_any_study():
-    space = find_search_space("rbf")
+def test_trial_k_draws_the_same_values_in_any_study(space):
     distributions = {p.key: p.distribution() for p in space.params}
 
     def draws(skip: int) -> dict:
@@ -165,8 +170,7 @@ def test_every_search_space_loads_and_tunes_without_transfer_on_tuning_seeds():
             assert p.why
 
 
-def test_a_study_refuses_to_continue_with_another_search_space(tmp_path):
-    space = find_search_space("rbf").with_scale("smoke")
+def test_a_study_refuses_to_continue_with_another_search_space(space, tmp_path):
     folder = study_folder(tmp_path, space)
     study_module.prepare(StudyPlan(space, folder, trials=1))
     other = dataclasses.replace(space, seeds=(1000, 1001))

@@ -168,9 +168,12 @@ def build(root: Path, scale: str | None = None) -> Path:
     root = Path(root)
     sections = []
     out_dir = None
+    scales = {}  # composing takes a moment: once per scale
     for learner in available_learners():
         space = find_search_space(learner).with_scale(scale)
-        scale_cfg = compose_config([f"scale={space.scale}", f"paths.root={root}"])
+        if space.scale not in scales:
+            scales[space.scale] = compose_config([f"scale={space.scale}", f"paths.root={root}"])
+        scale_cfg = scales[space.scale]
         out_dir = Path(scale_cfg.paths.reports_dir)
         csv = study_folder(root, space) / TRIALS_FILE
         trials = load_trials(csv) if csv.is_file() else None
