@@ -22,7 +22,7 @@ import optuna
 from optuna.storages import RDBStorage, RetryHeartbeatStaleTrialCallback, fail_stale_trials
 from optuna.trial import TrialState
 
-from .. import tracking
+from ..tracking import TrackingSettings
 from . import mlflow_log
 from .export import STUDY_FILE, write_trials_csv
 from .objective import evaluate
@@ -59,7 +59,7 @@ class StudyPlan:
     trials: int
     """Finished trials the study runs to."""
     workers: int = 1
-    tracking: tracking.TrackingSettings | None = None
+    tracking: TrackingSettings | None = None
     """MLflow store of the trial runs; None: no tracking."""
     parent_run_id: str | None = None
     """The study's MLflow run (set by prepare)."""
