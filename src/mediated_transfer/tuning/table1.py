@@ -62,6 +62,14 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
             lines.append(f"- Discovery / learning ({label}), per seed: first rewarded target episode "
                          f"{_per_seed(row, 'first_target_reward_step', steps=True)}; then to the first "
                          f"<R> >= 8 {_per_seed(row, 'learning_span', steps=True)} steps.")
+    discovery = trials[seed_columns(trials, "first_target_reward_step")]
+    if len(trials) > 1 and (discovery.nunique(dropna=False) == 1).all():
+        # Measured, not assumed: true for a learner whose weights start at 0 and get no update
+        # before the first reward (every TD error is 0), so its exploration is the same walk.
+        lines.append("- Discovery does not depend on the searched values: on each tuning seed every "
+                     "trial had its first rewarded target episode at the same step "
+                     f"({_per_seed(best, 'first_target_reward_step', steps=True)}); the values "
+                     "only change the learning after it.")
     lines += ["", "| key | range | provisional default | chosen (best trial) | why this range |",
               "|---|---|---:|---:|---|"]
     for p in space.params:
@@ -139,10 +147,17 @@ def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
             row = trials.index.get_loc(i)
             ok = shown[row]
             ax.scatter(discovery[row][ok], span[row][ok], s=size, marker="*", color=color, zorder=3)
+    # Discovered but never learned: drawn at the budget, so the panel shows both failures.
+    budget = max(int(c.split("@")[1]) for c in trials.columns if c.startswith("mean_reward@"))
+    stuck = ~np.isnan(discovery) & np.isnan(span)
+    ax.scatter(discovery[stuck], np.full(int(stuck.sum()), budget), marker="x", s=14, color="0.6",
+               label="never <R> >= 8 (drawn at the budget)")
+    ax.legend(fontsize=7, loc="best")
     fig.colorbar(points, ax=ax, label="L_R of the trial")
     ax.set_xlabel("discovery: first rewarded target episode (step)")
     ax.set_ylabel("learning: then to first <R> >= 8 (steps)")
-    ax.set_title(f"per seed; {int((~shown).sum())} of {shown.size} never reach <R> >= 8", fontsize=8)
+    ax.set_title(f"per seed: {int(np.isnan(discovery).sum())} of {shown.size} never rewarded, "
+                 f"{int(stuck.sum())} rewarded but never <R> >= 8", fontsize=8)
     for ax in list(axes.flat)[panels:]:
         ax.axis("off")
     fig.suptitle(f"{space.learner}: {len(trials)} trials, tuning seeds "
