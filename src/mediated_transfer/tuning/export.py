@@ -64,8 +64,11 @@ def backup_database(source: Path, target: Path) -> Path:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m mediated_transfer.tuning.export LEARNER [--backup FILE]``: rewrite trials.csv
-    from the study (running or not) and optionally write a consistent copy of its database."""
+    """``python -m mediated_transfer.tuning.export LEARNER [--snapshot DIR]``: rewrite trials.csv
+    from the study (running or not); with --snapshot, write a consistent pair instead: a copy
+    of study.db and the trials.csv of that copy, in DIR (to commit while workers keep going)."""
+    import optuna
+
     from .space import SearchSpaceError, find_search_space
     from .study import StudyPlan, load_study, study_folder
 
@@ -73,7 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("learner")
     parser.add_argument("--scale", default=None)
     parser.add_argument("--root", type=Path, default=Path("."))
-    parser.add_argument("--backup", type=Path, default=None, help="where to write the copy of study.db")
+    parser.add_argument("--snapshot", type=Path, default=None, help="folder for the copy of study.db + trials.csv")
     args = parser.parse_args(argv)
     try:
         space = find_search_space(args.learner).with_scale(args.scale)
@@ -84,9 +87,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not (folder / STUDY_FILE).is_file():
         print(f"error: no study at {folder / STUDY_FILE}", file=sys.stderr)
         return 2
-    print(write_trials_csv(load_study(StudyPlan(space, folder, trials=space.trials)), folder))
-    if args.backup is not None:
-        print(backup_database(folder / STUDY_FILE, args.backup))
+    if args.snapshot is None:
+        print(write_trials_csv(load_study(StudyPlan(space, folder, trials=space.trials)), folder))
+        return 0
+    copy = backup_database(folder / STUDY_FILE, args.snapshot / STUDY_FILE)
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    study = optuna.load_study(study_name=space.learner, storage=f"sqlite:///{copy}")
+    print(copy, write_trials_csv(study, args.snapshot), sep="\n")
     return 0
 
 
