@@ -61,7 +61,8 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
         if row is not None:
             lines.append(f"- Discovery / learning ({label}), per seed: first rewarded target episode "
                          f"{_per_seed(row, 'first_target_reward_step', steps=True)}; then to the first "
-                         f"<R> >= 8 {_per_seed(row, 'learning_span', steps=True)} steps.")
+                         f"<R> >= 8 {_per_seed(row, 'learning_span', steps=True)} steps; time to "
+                         f"threshold (stable) {_per_seed(row, 'time_to_threshold', steps=True)}.")
     discovery = trials[seed_columns(trials, "first_target_reward_step")]
     if len(trials) > 1 and (discovery.nunique(dropna=False) == 1).all():
         # Measured, not assumed: true for a learner whose weights start at 0 and get no update
