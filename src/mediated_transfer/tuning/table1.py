@@ -57,7 +57,8 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
                      f"{int(default['trial'])}; per seed {_per_seed(default, 'reward_loss')}); "
                      f"rank {int((trials['objective'] < default['objective']).sum()) + 1} of {len(trials)}.")
     lines.append(f"- Median trial: L_R {trials['objective'].median():.1f}.")
-    for label, row in (("best", best), ("defaults", default)):
+    same = default is not None and int(default["trial"]) == int(best["trial"])
+    for label, row in (("best" + (" = defaults" if same else ""), best), ("defaults", None if same else default)):
         if row is not None:
             lines.append(f"- Discovery / learning ({label}), per seed: first rewarded target episode "
                          f"{_per_seed(row, 'first_target_reward_step', steps=True)}; then to the first "
