@@ -88,7 +88,7 @@ class SearchSpace:
     def with_scale(self, scale: str | None) -> "SearchSpace":
         if scale is None or scale == self.scale:
             return self
-        _check_scale(self.path, scale)
+        _check_scale("scale", scale)
         return SearchSpace(self.path, self.learner, self.base, self.seeds, scale, self.trials,
                            self.sampler_seed, self.params, self.defaults)
 
@@ -164,7 +164,7 @@ def load_search_space(path: str | Path) -> SearchSpace:
         fail("seeds", f"must be distinct, got {seeds}")
     if not isinstance(scale, str):
         fail("scale", f"must name a conf/scale option, got {scale!r}")
-    _check_scale(path, scale)
+    _check_scale(f"{path.name}: scale", scale)
     if not _is_int(data["trials"]) or data["trials"] < 1:
         fail("trials", f"must be an integer >= 1, got {data['trials']!r}")
     sampler = data["sampler"]
@@ -248,10 +248,10 @@ def _parameter(key: str, spec: Any, current: Any, fail) -> Parameter:
     return Parameter(key, kind, low, high, log, why=why.strip())
 
 
-def _check_scale(path: Path, scale: str) -> None:
+def _check_scale(where: str, scale: str) -> None:
     scales = sorted(p.stem for p in (CONF_DIR / "scale").glob("*.yaml"))
     if scale not in scales:
-        raise SearchSpaceError(f"{path.name}: scale: {scale!r} is not a conf/scale option; allowed: {', '.join(scales)}")
+        raise SearchSpaceError(f"{where}: {scale!r} is not a conf/scale option; allowed: {', '.join(scales)}")
 
 
 def _is_int(value: Any) -> bool:
