@@ -37,7 +37,7 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports mlflow-ui
+.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot table1
 
 reproduce-tables: $(STAMP) ## Run the Tables II-IV sweeps at SCALE=paper|quick|smoke (resumable), then build reports/
 	@for experiment in $(EXPERIMENTS); do \
@@ -50,3 +50,21 @@ reports: $(STAMP) ## Build reports/ (tables, figures, MLflow summaries) from the
 
 mlflow-ui: $(STAMP) ## Browse the runs in MLflow's UI, served on 127.0.0.1 only (MLFLOW_PORT=5000)
 	$(BIN)/mlflow ui --backend-store-uri sqlite:///$(MLFLOW_DB) --host 127.0.0.1 --port $(MLFLOW_PORT)
+
+# --- tuning: Table I (README: "Tuning") --------------------------------------------------------
+LEARNER ?= rbf
+WORKERS ?= 1
+TRIALS  ?=
+
+tune: $(STAMP) ## Random search of LEARNER=rbf|fsr|dqn (resumable; WORKERS=1, SCALE=paper|quick|smoke, TRIALS=)
+	$(BIN)/python -m mediated_transfer.tuning $(LEARNER) --workers $(WORKERS) --scale $(SCALE) $(if $(TRIALS),--trials $(TRIALS)) $(ARGS)
+
+SNAPSHOT := .cache/tune-snapshot/$(LEARNER)
+tune-snapshot: $(STAMP) ## Stage for git a consistent copy of LEARNER's (running) paper-scale study.db and its trials.csv
+	$(BIN)/python -m mediated_transfer.tuning.export $(LEARNER) --snapshot $(SNAPSHOT)
+	@# Staged from the copy: the live files may change while a worker writes them.
+	git update-index --add --cacheinfo 100644,$$(git hash-object -w $(SNAPSHOT)/study.db),tuning/$(LEARNER)/study.db
+	git update-index --add --cacheinfo 100644,$$(git hash-object -w $(SNAPSHOT)/trials.csv),tuning/$(LEARNER)/trials.csv
+
+table1: $(STAMP) ## Build reports/table1.md and its figures from the committed tuning/*/trials.csv
+	$(BIN)/python -m mediated_transfer.tuning.table1 $(ARGS)

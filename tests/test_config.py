@@ -38,9 +38,14 @@ def _compose(*overrides: str, hydra: bool = False):
     return compose("config", overrides=prepare_overrides(overrides), return_hydra_config=hydra)
 
 
+# Not groups of a run: Hydra's own, whole experiments, and the tuning's search spaces (read by
+# mediated_transfer.tuning, checked in tests/test_tuning.py).
+NOT_RUN_GROUPS = ("hydra", "experiment", "hparams_search")
+
+
 def _options() -> list[str]:
     out = []
-    for group in sorted(p for p in CONF_DIR.iterdir() if p.is_dir() and p.name not in ("hydra", "experiment")):
+    for group in sorted(p for p in CONF_DIR.iterdir() if p.is_dir() and p.name not in NOT_RUN_GROUPS):
         out += [f"{group.name}={option.stem}" for option in sorted(group.glob("*.yaml"))]
     for group, options in schema.PYTHON_OPTIONS.items():
         out += [f"{group}={name}" for name in options]

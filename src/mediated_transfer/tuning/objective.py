@@ -1,0 +1,76 @@
+"""One trial: the target task learned without transfer at every tuning seed, scored by reward loss.
+
+The objective is the mean reward loss L_R over the tuning seeds. Beside it a trial records, per
+seed, the evaluation curve, L_R, the learning step of the first rewarded target-task episode
+(discovery: when the learner first solved the mediated interaction by chance), the first
+evaluation step with <R> >= threshold, and the span between the two (learning: how long it then
+took to learn the tool skill). Issue 9 found that transfer shortens discovery, not learning; the
+split shows which of the two a hyperparameter moves.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..results import RunResult
+from .space import SearchSpace
+
+
+def run_seed(overrides: Sequence[str]) -> tuple[RunResult, float]:
+    """Compose the config of one run and execute it; returns its result and its threshold.
+
+    The only place where the tuning turns a config into a learning run.
+    """
+    from ..config.spec import run_spec
+    from ..run import execute_run
+    from ..config.compose import compose_config
+
+    cfg = compose_config(overrides)
+    return execute_run(run_spec(cfg)), float(cfg.threshold)
+
+
+def first_step_at_threshold(steps: Sequence[int], rewards: Sequence[float], threshold: float) -> int | None:
+    """The first evaluation step with <R> >= threshold (reached once, stable or not); None: never."""
+    above = [s for s, r in zip(steps, rewards) if r >= threshold]
+    return int(above[0]) if above else None
+
+
+def learning_span(discovery: int | None, at_threshold: int | None) -> int | None:
+    """Steps from the first rewarded target-task episode to the first <R> >= threshold."""
+    return None if discovery is None or at_threshold is None else at_threshold - discovery
+
+
+def trial_record(seeds: Sequence[int], results: Sequence[RunResult], threshold: float) -> dict[str, Any]:
+    """What a trial keeps: per-seed lists (in the order of ``seeds``) and the mean curve."""
+    steps = list(results[0].steps)
+    if any(list(r.steps) != steps for r in results):
+        raise ValueError("the runs of a trial must share their evaluation steps")
+    at_threshold = [first_step_at_threshold(r.steps, r.mean_reward, threshold) for r in results]
+    discovery = [r.first_target_reward_step for r in results]
+    return {
+        "seeds": [int(s) for s in seeds],
+        "steps": steps,
+        "mean_curve": [float(v) for v in np.mean([r.mean_reward for r in results], axis=0)],
+        "curves": [[float(v) for v in r.mean_reward] for r in results],
+        "reward_loss": [float(r.reward_loss) for r in results],
+        "first_target_reward_step": discovery,
+        "first_threshold_step": at_threshold,
+        "learning_span": [learning_span(d, t) for d, t in zip(discovery, at_threshold)],
+        "time_to_threshold": [r.time_to_threshold for r in results],
+        "final_reward": [float(r.mean_reward[-1]) for r in results],
+        "wall_time_s": [float(r.wall_time_s) for r in results],
+        "threshold": threshold,
+    }
+
+
+def evaluate(space: SearchSpace, values: Mapping[str, Any]) -> tuple[float, dict[str, Any]]:
+    """Run a trial with ``values`` at every tuning seed: (mean L_R, the trial's record)."""
+    results, threshold = [], None
+    for seed in space.seeds:
+        result, threshold = run_seed(space.run_overrides(values, seed))
+        results.append(result)
+    record = trial_record(space.seeds, results, threshold)
+    return float(np.mean(record["reward_loss"])), record

@@ -1,0 +1,178 @@
+"""The tuning protocol (issue 9) end to end at smoke scale, in a temporary folder: a two-trial
+search stores its study with the provisional defaults as trial 0, resumes to exactly the new
+trial count, redoes a trial whose worker died, logs every trial as an MLflow run nested under
+the study's, exports trials.csv, and Table I builds from it; a bad search-space file is refused
+in one line naming the key."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import time
+from pathlib import Path
+
+import optuna
+import pandas as pd
+import pytest
+
+from mediated_transfer import tracking
+from mediated_transfer.results import RunResult
+from mediated_transfer.tuning import mlflow_log, study as study_module
+from mediated_transfer.tuning.__main__ import main as tune
+from mediated_transfer.tuning.objective import first_step_at_threshold, learning_span, trial_record
+from mediated_transfer.tuning.sampler import TrialSeededRandomSampler
+from mediated_transfer.tuning.space import SEARCH_SPACE_DIR, SearchSpaceError, find_search_space, load_search_space
+from mediated_transfer.tuning.study import StudyPlan, load_study, study_folder
+from mediated_transfer.tuning.table1 import main as table1
+
+from .test_tracking import fresh_store
+
+SMOKE = ["--scale", "smoke"]
+
+
+@pytest.fixture(scope="module")
+def space():
+    """The RBF search space at smoke scale (loading composes a config: done once)."""
+    return find_search_space("rbf").with_scale("smoke")
+
+
+def _study(space, root: Path) -> optuna.Study:
+    return load_study(StudyPlan(space, study_folder(root, space), trials=1))
+
+
+def _complete(space, root: Path) -> list:
+    return _study(space, root).get_trials(states=(optuna.trial.TrialState.COMPLETE,))
+
+
+def test_search_stores_resumes_tracks_exports_and_builds_table1(space, tmp_path, capsys):
+    fresh_store(tmp_path)  # <root>/mlflow.db, its tables already made (that takes seconds)
+    assert tune(["rbf", *SMOKE, "--trials", "2", "--root", str(tmp_path)]) == 0
+    folder = tmp_path / "tuning" / "rbf" / "smoke"
+    assert (folder / "study.db").is_file()
+    first = _complete(space, tmp_path)
+    assert [t.number for t in first] == [0, 1]
+    assert first[0].user_attrs["role"] == "defaults" and first[0].params == space.defaults
+    assert first[1].user_attrs["role"] == "random"
+    record = first[1].user_attrs
+    assert record["seeds"] == [1000, 1001, 1002] and len(record["reward_loss"]) == 3
+    assert first[1].value == pytest.approx(sum(record["reward_loss"]) / 3)
+    assert re.search(r"\[rbf/smoke 2/2, ~\S+ left\] trial 1 \(random\): L_R [\d.]+ .*best [\d.]+ "
+                     r"\(trial \d\), defaults [\d.]+", capsys.readouterr().out)
+
+    # Resumed with a larger count: exactly one more trial, the first two untouched.
+    assert tune(["rbf", *SMOKE, "--trials", "3", "--root", str(tmp_path)]) == 0
+    again = _complete(space, tmp_path)
+    assert [t.number for t in again] == [0, 1, 2]
+    assert [t.params for t in again[:2]] == [t.params for t in first]
+    assert tune(["rbf", *SMOKE, "--trials", "3", "--root", str(tmp_path)]) == 0
+    assert len(_study(space, tmp_path).trials) == 3
+
+    trials = pd.read_csv(folder / "trials.csv")
+    assert list(trials["trial"]) == [0, 1, 2] and list(trials["role"]) == ["defaults", "random", "random"]
+    for column in ("objective", "algorithm.lambda_", "reward_loss.seed_1002", "learning_span.seed_1000",
+                   "first_target_reward_step.seed_1001", "first_threshold_step.seed_1000", "mean_reward@200"):
+        assert column in trials.columns
+
+    settings = tracking.TrackingSettings(f"sqlite:///{tmp_path / 'mlflow.db'}")
+    runs = tracking.find_runs(settings, mlflow_log.EXPERIMENT)
+    parents = [r for r in runs if "mlflow.parentRunId" not in r.data.tags]
+    children = [r for r in runs if r.data.tags.get("mlflow.parentRunId") == parents[0].info.run_id]
+    assert len(parents) == 1 and sorted(int(r.data.tags["tuning_trial"]) for r in children) == [0, 1, 2]
+    history = settings.client().get_metric_history(children[0].info.run_id, "mean_reward")
+    assert sorted(m.step for m in history) == [100, 200]  # the curve, step = learning step
+
+    assert table1(["--root", str(tmp_path), "--scale", "smoke"]) == 0
+    text = (tmp_path / "reports" / "smoke" / "table1.md").read_text()
+    assert "## rbf" in text and "3 trials finished" in text and "tuning seeds 1000, 1001, 1002" in text
+    assert "`algorithm.epsilon` | 0.01 - 0.3 (log) | 0.1 |" in text
+    assert "Not tuned yet" in text  # fsr and dqn
+    assert (tmp_path / "reports" / "smoke" / "table1_rbf.png").stat().st_size > 10_000
+
+
+@pytest.mark.filterwarnings("ignore:Heartbeat of storage is supposed to be used with Study.optimize")
+def test_a_trial_whose_worker_died_is_redone_with_its_values(space, tmp_path, monkeypatch):
+    monkeypatch.setattr(study_module, "GRACE_S", 1)
+    plan = study_module.prepare(StudyPlan(space, study_folder(tmp_path, space), trials=1))
+    study = load_study(plan)
+    study.ask()  # the queued defaults: pretend a worker takes them
+    dead = study.ask({p.key: p.distribution() for p in space.params})
+    study._storage.record_heartbeat(dead._trial_id)  # its last heartbeat; then the worker dies
+    time.sleep(2)
+    study.tell(0, state=optuna.trial.TrialState.FAIL)  # Ctrl-C: failed without a retry
+    assert tune(["rbf", *SMOKE, "--trials", "2", "--root", str(tmp_path), "--tracking", "none"]) == 0
+    done = _complete(space, tmp_path)
+    assert len(done) == 2
+    assert {t.user_attrs["role"] for t in done} == {"defaults", "random"}
+    assert dead.params in [t.params for t in done]
+
+
+def test_first_step_at_threshold_and_the_learning_span():
+    steps = [100, 200, 300, 400]
+    assert first_step_at_threshold(steps, [0.0, 8.0, 7.0, 9.0], 8.0) == 200  # reached, not stable
+    assert first_step_at_threshold(steps, [0.0, 7.9, 7.0, 1.0], 8.0) is None
+    assert learning_span(40, 200) == 160
+    assert learning_span(None, 200) is None and learning_span(40, None) is None
+
+    def result(rewards, discovery):
+        return RunResult("linear_q", "rbf", "none", 0, 0, 400, steps, rewards, [r / 10 for r in rewards],
+                         sum(10 - r for r in rewards), None, None, 0, 1.0, 1.0,
+                         first_target_reward_step=discovery)
+
+    record = trial_record([1000, 1001], [result([0, 8, 9, 10], 150), result([0, 0, 0, 4], None)], 8.0)
+    assert record["mean_curve"] == [0.0, 4.0, 4.5, 7.0]
+    assert record["reward_loss"] == [13.0, 36.0]
+    assert record["first_threshold_step"] == [200, None] and record["learning_span"] == [50, None]
+
+
+def test_trial_k_draws_the_same_values_in_any_study(space):
+    distributions = {p.key: p.distribution() for p in space.params}
+
+    def draws(skip: int) -> dict:
+        study = optuna.create_study(sampler=TrialSeededRandomSampler(space.sampler_seed))
+        for _ in range(skip):
+            study.ask()  # other trials (another worker's, or before a resumption)
+        study.ask(distributions)  # the trial before: consumes draws in a single-stream sampler
+        return study.ask(distributions).params
+
+    assert draws(0) != draws(1)  # the trial number matters ...
+    study = optuna.create_study(sampler=TrialSeededRandomSampler(space.sampler_seed))
+    study.ask()
+    study.ask()  # ... and nothing else: trial 2 gets the same values with no draw before it
+    assert study.ask(distributions).params == draws(1)
+
+
+@pytest.mark.parametrize("change, key", [
+    (("algorithm.epsilon:", "algorithm.epsilonn:"), "params.algorithm.epsilonn"),
+    (("seeds: [1000, 1001, 1002]", "seeds: [1000, 3]"), "seeds"),
+    (("    low: 0.01\n", "    low: 0\n"), "params.algorithm.epsilon.low"),
+    (("    low: 100.0\n    high: 1000000.0", "    low: 100.0\n    high: 10.0"), "params.algorithm.boyan_n0"),
+    (("choices: [true, false]", "choices: [true, 1]"), "params.representation.normalize.choices"),
+    (("scale: paper", "scale: huge"), "scale"),
+    (("sampler: {name: random,", "sampler: {name: grid,"), "sampler.name"),
+])
+def test_a_bad_search_space_is_refused_in_one_line_naming_the_key(tmp_path, change, key):
+    text = (SEARCH_SPACE_DIR / "linear_q_rbf.yaml").read_text()
+    assert change[0] in text
+    path = tmp_path / "bad.yaml"
+    path.write_text(text.replace(change[0], change[1], 1))
+    with pytest.raises(SearchSpaceError) as error:
+        load_search_space(path)
+    message = str(error.value)
+    assert "\n" not in message and message.startswith(f"bad.yaml: {key}:")
+
+
+def test_every_search_space_loads_and_tunes_without_transfer_on_tuning_seeds():
+    for path in sorted(SEARCH_SPACE_DIR.glob("*.yaml")):
+        space = load_search_space(path)
+        assert all(seed >= 20 for seed in space.seeds) and len(space.seeds) >= 3
+        assert space.scale == "paper" and "strategy=none" in space.base
+        for p in space.params:
+            assert p.why
+
+
+def test_a_study_refuses_to_continue_with_another_search_space(space, tmp_path):
+    folder = study_folder(tmp_path, space)
+    study_module.prepare(StudyPlan(space, folder, trials=1))
+    other = dataclasses.replace(space, seeds=(1000, 1001))
+    with pytest.raises(study_module.StudyMismatchError, match=r"another search space \(seeds differ"):
+        study_module.prepare(StudyPlan(other, folder, trials=1))
