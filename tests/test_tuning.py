@@ -176,3 +176,34 @@ def test_a_study_refuses_to_continue_with_another_search_space(space, tmp_path):
     other = dataclasses.replace(space, seeds=(1000, 1001))
     with pytest.raises(study_module.StudyMismatchError, match=r"another search space \(seeds differ"):
         study_module.prepare(StudyPlan(other, folder, trials=1))
+
+
+def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, capsys):
+    import shutil
+
+    from mediated_transfer.tuning import refine
+    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
+
+    folder = tmp_path / "spaces"
+    (folder / "refine").mkdir(parents=True)
+    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
+    (folder / "refine" / "fsr.yaml").write_text(
+        "learner: fsr\nseeds: [1000, 1001]\ncandidates:\n"
+        "  defaults: {from: provisional defaults, values: {}}\n"
+        "  greedy: {from: a test, values: {algorithm.epsilon: 0.01}}\n")
+    refinement = refine.load_refinement("fsr", folder, scale="smoke")
+    assert [c.name for c in refinement.candidates] == ["defaults", "greedy"]
+    assert refinement.candidates[1].values["algorithm.epsilon"] == 0.01
+    assert refinement.candidates[1].values["algorithm.lambda_"] == refinement.space.defaults["algorithm.lambda_"]
+
+    rows = refine.refine(refinement, tmp_path / "out")
+    assert sorted(zip(rows["candidate"], rows["seed"])) == [
+        ("defaults", 1000), ("defaults", 1001), ("greedy", 1000), ("greedy", 1001)]
+    again = refine.refine(refinement, tmp_path / "out")  # nothing left to run
+    assert len(again) == 4 and "0 to run" in capsys.readouterr().out
+    text = refine.section(refinement, again)
+    assert "| defaults | provisional defaults | 2 |" in text and "| greedy | a test | 2 |" in text
+
+    (folder / "refine" / "fsr.yaml").write_text("learner: fsr\nseeds: [3]\ncandidates: {}\n")
+    with pytest.raises(SearchSpaceError, match="table seeds"):
+        refine.load_refinement("fsr", folder, scale="smoke")

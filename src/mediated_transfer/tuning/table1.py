@@ -195,6 +195,7 @@ def build(root: Path, scale: str | None = None) -> Path:
         csv = study_folder(root, space) / TRIALS_FILE
         trials = load_trials(csv) if csv.is_file() else None
         sections.append(learner_section(space, trials, int(scale_cfg.scale.budget)))
+        sections.append(_refinement_section(space, csv.parent))
         if trials is not None and not trials.empty:
             figure(space, trials, out_dir / f"table1_{space.learner}.png")
     text = "\n".join([
@@ -208,6 +209,19 @@ def build(root: Path, scale: str | None = None) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out_dir / TABLE_FILE, text)
     return out_dir / TABLE_FILE
+
+
+def _refinement_section(space: SearchSpace, folder: Path) -> str:
+    """The manual refinement's table (tuning/refine.py), when one was run for this learner."""
+    from .refine import REFINE_FILE, load_refinement, section
+
+    if not (folder / REFINE_FILE).is_file():
+        return ""
+    try:
+        refinement = load_refinement(space.learner, scale=space.scale)
+    except SearchSpaceError:
+        return ""
+    return section(refinement, pd.read_csv(folder / REFINE_FILE))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
