@@ -141,14 +141,14 @@ def cli(argv: Sequence[str] | None = None) -> Any:
     """``python -m mediated_transfer``: check the command, then Hydra's command line."""
     args = sys.argv[1:] if argv is None else list(argv)
     overrides = [a for a in args if is_override(a)]
-    if not any(a in INFORMATIONAL_FLAGS or a.startswith("--cfg=") for a in args):
-        try:
+    try:
+        quoted = iter(prepare_overrides(overrides))
+        if not any(a in INFORMATIONAL_FLAGS or a.startswith("--cfg=") for a in args):
             preflight(overrides, multirun=any(a in ("-m", "--multirun") for a in args))
-        except ConfigError as error:
-            raise SystemExit(f"Invalid configuration: {error}") from None
-        except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line
-            raise SystemExit(f"Could not prepare the runs: {type(error).__name__}: {_first_line(error)}") from None
-    quoted = iter(prepare_overrides(overrides))
+    except ConfigError as error:
+        raise SystemExit(f"Invalid configuration: {error}") from None
+    except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line
+        raise SystemExit(f"Could not prepare the runs: {type(error).__name__}: {_first_line(error)}") from None
     sys.argv = [sys.argv[0], *(next(quoted) if is_override(a) else a for a in args)]
     return main()
 

@@ -56,6 +56,7 @@ def prepare_overrides(overrides: Sequence[str]) -> list[str]:
     """
     out = []
     for arg in overrides:
+        _check_tuned_choice(arg)
         match = re.fullmatch(r"([\w.]+)=(\d+(?:,\d+)*)", arg)
         if match and match.group(1) in NUMERIC_GROUPS:
             values = [int(v) for v in match.group(2).split(",")]
@@ -64,6 +65,16 @@ def prepare_overrides(overrides: Sequence[str]) -> list[str]:
             arg = f"{match.group(1)}=" + ",".join(f"'{v}'" for v in values)
         out.append(arg)
     return out
+
+
+def _check_tuned_choice(arg: str) -> None:
+    # `tuned` is an optional group (a learner without Table I values has no file), so Hydra
+    # would silently skip a misspelt choice: refuse it here.
+    match = re.fullmatch(r"tuned=([\w.-]+)", arg)
+    if match:
+        allowed = sorted(p.stem for p in (CONF_DIR / "tuned").glob("*.yaml"))
+        if match.group(1) not in allowed:
+            raise ConfigError(f"tuned={match.group(1)}: no such option; allowed: {', '.join(allowed)}")
 
 
 # --- composing -------------------------------------------------------------------------------------

@@ -178,7 +178,9 @@ def load_search_space(path: str | Path) -> SearchSpace:
         fail("params", "must map at least one override key to its range or choices")
 
     try:
-        cfg = compose_config(base)
+        # The provisional defaults (the dataclasses'), not Table I's tuned values: the study
+        # starts from them, and Table I compares them with what the study chose.
+        cfg = compose_config([*base, "tuned=provisional"])
     except ConfigError as error:  # one line naming the key
         fail("base", f"does not compose: {str(error).splitlines()[0]}")
     table_seeds = int(cfg.scale.seeds)  # the default scale is the paper's: its seeds 0..n-1
