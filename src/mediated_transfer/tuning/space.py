@@ -85,6 +85,11 @@ class SearchSpace:
         searched = [f"{p.key}={override_value(values[p.key])}" for p in self.params]
         return [*self.base, f"scale={self.scale}", "tracking=none", f"seed={seed}", *searched]
 
+    def learner_pair(self) -> str:
+        """``<algorithm>_<representation>`` of the base overrides: the name of its conf/tuned/ file."""
+        choice = {o.split("=", 1)[0]: o.split("=", 1)[1] for o in self.base if "=" in o}
+        return f"{choice.get('algorithm', 'linear_q')}_{choice.get('representation', 'rbf')}"
+
     def with_scale(self, scale: str | None) -> "SearchSpace":
         if scale is None or scale == self.scale:
             return self

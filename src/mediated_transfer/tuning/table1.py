@@ -72,12 +72,15 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
                      "trial had its first rewarded target episode at the same step "
                      f"({_per_seed(best, 'first_target_reward_step', steps=True)}); the values "
                      "only change the learning after it.")
-    lines += ["", "| key | range | provisional default | chosen (best trial) | why this range |",
-              "|---|---|---:|---:|---|"]
+    tuned = tuned_values(space)
+    lines += ["", f"| key | range | provisional default | best trial ({int(best['trial'])}) | "
+              f"chosen ({'conf/tuned/' + space.learner_pair() + '.yaml' if tuned else 'none yet'}) | why this range |",
+              "|---|---|---:|---:|---:|---|"]
     for p in space.params:
-        chosen = best[p.key] if p.key in best else math.nan
+        in_best = best[p.key] if p.key in best else math.nan
+        chosen = _value(tuned[p.key]) if p.key in tuned else "-"
         lines.append(f"| `{p.key}` | {_cell(p.describe())} | {_value(space.defaults[p.key])} | "
-                     f"{_value(chosen)} | {_cell(p.why)} |")
+                     f"{_value(in_best)} | {chosen} | {_cell(p.why)} |")
     lines += ["", f"![objective against each key](table1_{space.learner}.png)", ""]
     return "\n".join(lines)
 
@@ -209,6 +212,19 @@ def build(root: Path, scale: str | None = None) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out_dir / TABLE_FILE, text)
     return out_dir / TABLE_FILE
+
+
+def tuned_values(space: SearchSpace) -> dict:
+    """The values conf/tuned/ holds for the learner of ``space`` ({} before it is tuned)."""
+    from omegaconf import OmegaConf
+
+    from ..config.compose import CONF_DIR
+
+    path = CONF_DIR / "tuned" / f"{space.learner_pair()}.yaml"
+    if not path.is_file():
+        return {}
+    data = OmegaConf.to_container(OmegaConf.load(path)) or {}
+    return {f"{group}.{key}": value for group, keys in data.items() for key, value in keys.items()}
 
 
 def _refinement_section(space: SearchSpace, folder: Path) -> str:
