@@ -269,3 +269,32 @@ def test_numeric_group_choices_are_quoted_for_hydra():
     assert prepare_overrides(["n_source=15", "seed=3"]) == ["n_source='15'", "seed=3"]
     assert prepare_overrides(["n_source=1,15"]) == ["n_source='1','15'"]
     assert prepare_overrides(["n_source='15'", "scale.budget=10"]) == ["n_source='15'", "scale.budget=10"]
+
+
+def _tuned_files():
+    return sorted(p for p in (CONF_DIR / "tuned").glob("*.yaml") if p.stem != "provisional")
+
+
+@pytest.mark.parametrize("path", _tuned_files(), ids=lambda p: p.stem)
+def test_tuned_values_apply_to_their_learner_only_and_are_searched_keys(path):
+    from mediated_transfer.tuning.space import available_learners, load_search_space
+
+    algorithm, representation = path.stem.split("_", 1) if not path.stem.startswith("linear_q") \
+        else ("linear_q", path.stem.removeprefix("linear_q_"))
+    tuned = OmegaConf.to_container(OmegaConf.load(path))
+    values = {f"{group}.{key}": v for group, keys in tuned.items() for key, v in keys.items()}
+    assert values, f"{path.name} sets no value"
+    learner = compose_config([f"algorithm={algorithm}", f"representation={representation}"])
+    provisional = compose_config([f"algorithm={algorithm}", f"representation={representation}", "tuned=provisional"])
+    for key, value in values.items():
+        assert OmegaConf.select(learner, key) == value
+        group, field = key.split(".")
+        option = schema.PYTHON_OPTIONS[group][learner[group].name]
+        assert OmegaConf.select(provisional, key) == getattr(option(), field)
+    # A study's trials override every searched key, so tuned values must be searched keys.
+    spaces = [load_search_space(p) for p in available_learners().values()]
+    [space] = [s for s in spaces if f"representation={representation}" in s.base]
+    assert set(values) <= {p.key for p in space.params}
+    # Every value names where it comes from.
+    text = path.read_text()
+    assert all(f"{key.split('.')[1]}:" in text for key in values) and "refine" in text
