@@ -56,7 +56,9 @@ def sweep_progress(sweep_dir: Path) -> tuple[int, int, float | None] | None:
         plan = json.loads((sweep_dir / PLAN_FILE).read_text())
     except (OSError, ValueError):
         return None
-    results = [p.stat().st_mtime for p in sweep_dir.glob("**/result.json")]
+    # Only this sweep's runs: other sweeps (variants) may share the folder.
+    files = [sweep_dir / run / "result.json" for run in plan.get("runs", [])]
+    results = [f.stat().st_mtime for f in files if f.is_file()]
     finished = min(len(results), plan["total"])
     # Only runs computed since this launch tell the current speed (earlier ones were skipped).
     computed = sum(t >= plan["started"] for t in results)

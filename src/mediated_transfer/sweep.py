@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.types import RunMode
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from . import tracking
 from .atomic import atomic_write_text
@@ -53,12 +53,15 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
     distinct = sorted({tuple(o for o in job if not o.startswith("seed=")) for job in jobs})
-    specs = [run_spec(compose_config(list(job))) for job in distinct]
+    configs = {job: compose_config(list(job), hydra=True) for job in distinct}
+    specs = [run_spec(cfg) for cfg in configs.values()]
     _prepare_tracking(base)
     _warm_source_task_cache(specs)
     sweep_dir = Path(base.hydra.sweep.dir)
     sweep_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(sweep_dir / PLAN_FILE, json.dumps({"total": len(jobs), "started": time.time()}) + "\n")
+    runs = [_run_folder(configs[tuple(o for o in job if not o.startswith("seed="))], job) for job in jobs]
+    plan = {"total": len(jobs), "started": time.time(), "runs": runs}
+    atomic_write_text(sweep_dir / PLAN_FILE, json.dumps(plan) + "\n")
     log.info("sweep %s: %d runs in %s", base.name, len(jobs), sweep_dir)
     return jobs
 
@@ -80,6 +83,15 @@ def planned_jobs(config: DictConfig, overrides: Sequence[str] | None = None) -> 
         else:
             raise ConfigError(f"{override.input_line}: interval sweeps need a sweeper plugin (e.g. tuning)")
     return [list(job) for job in itertools.product(*choices.values())]
+
+
+def _run_folder(cfg: DictConfig, job: Sequence[str]) -> str:
+    """The job's folder below the sweep folder (hydra.sweep.subdir, resolved for its seed)."""
+    seed = next((o.split("=", 1)[1] for o in job if o.startswith("seed=")), None)
+    if seed is not None:
+        cfg = cfg.copy()
+        OmegaConf.update(cfg, "seed", int(seed))
+    return str(cfg.hydra.sweep.subdir).rstrip("/")
 
 
 def _is_hydra_override(override: str) -> bool:
