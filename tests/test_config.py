@@ -151,9 +151,10 @@ def _seed(job: list[str]) -> int:
 @pytest.mark.parametrize("group, name, cls", [
     (g, n, c) for g, options in schema.PYTHON_OPTIONS.items() for n, c in options.items()])
 def test_python_configured_options_compose_to_their_dataclass_defaults(hydra_context, group, name, cls):
-    # One place per default: the dataclass. The composed node holds exactly its fields and values.
+    # One place per default: the dataclass. The composed node holds exactly its fields and values
+    # (Table I's tuned values aside, conf/tuned/, tested below).
     companions = {"dqn": ["representation=network"], "network": ["algorithm=dqn"]}
-    node = _compose(f"{group}={name}", *companions.get(name, []))[group]
+    node = _compose(f"{group}={name}", *companions.get(name, []), "tuned=provisional")[group]
     assert OmegaConf.get_type(node) is cls
     assert OmegaConf.to_container(node) == dataclasses.asdict(cls())
 
