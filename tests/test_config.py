@@ -5,6 +5,7 @@ message naming the key and the allowed values."""
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import pytest
 from hydra import compose, initialize_config_dir
@@ -270,6 +271,14 @@ def test_numeric_group_choices_are_quoted_for_hydra():
     assert prepare_overrides(["n_source=15", "seed=3"]) == ["n_source='15'", "seed=3"]
     assert prepare_overrides(["n_source=1,15"]) == ["n_source='1','15'"]
     assert prepare_overrides(["n_source='15'", "scale.budget=10"]) == ["n_source='15'", "scale.budget=10"]
+    assert prepare_overrides(["n_source='7'"]) == ["n_source='7'"]
+    assert prepare_overrides(["n_source=choice(7,8)"]) == ["n_source='7','8'"]
+    assert prepare_overrides(["n_source=range(1,3)"]) == ["n_source='1','2'"]
+    assert prepare_overrides(["n_source=1, 7"]) == ["n_source='1','7'"]
+    for bad, message in [("n_source=-1", "or any other integer >= 0"), ("n_source=interval(1,2)", "integers"),
+                         ("key=[unclosed", "key=[unclosed"), ("tuned=xx", "allowed: ")]:
+        with pytest.raises(ConfigError, match=re.escape(message)):
+            prepare_overrides([bad])
 
 
 def _tuned_files():

@@ -254,3 +254,33 @@ def test_comments_and_docstrings_do_not_make_results_stale(tmp_path):
     assert source_digest(tmp_path) == source_digest()
     run.write_text(run.read_text().replace("step += 1", "step += 2"))
     assert source_digest(tmp_path) != source_digest()
+
+
+def test_a_sweep_refuses_a_folder_of_another_configuration_before_any_run(root, source_cache):
+    common = ["-m", "cell=none_0", "seed=0,1", "hydra/launcher=basic", "tracking=none", "experiment=table2_rbf",
+              *_common(root, source_cache)]
+    _run_cli(*common)
+    sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
+    stored = json.loads((sweep_dir / "none_0" / "seed=1" / "result.json").read_text())
+    stored["config"]["threshold"] = 7.0
+    (sweep_dir / "none_0" / "seed=1" / "result.json").write_text(json.dumps(stored))
+    untouched = (sweep_dir / "none_0" / "seed=0" / "result.json").stat().st_mtime_ns
+    with pytest.raises(SystemExit) as error:
+        _run_cli(*common)
+    assert "holds a finished run of another configuration (threshold: stored 7.0" in str(error.value)
+    assert "\n" not in str(error.value)
+    assert (sweep_dir / "none_0" / "seed=0" / "result.json").stat().st_mtime_ns == untouched
+
+
+def test_a_baseline_and_a_variant_sharing_a_sweep_folder_keep_their_own_plans(root, source_cache):
+    from mediated_transfer.progress import sweep_progress
+    from mediated_transfer.sweep import PLAN_PREFIX
+
+    common = ["-m", "experiment=table2_rbf", "cell=none_0", "hydra/launcher=basic", "tracking=none",
+              *_common(root, source_cache)]
+    _run_cli(*common)
+    _run_cli(*common, "algorithm.lambda_=0.5", "seed=0,1")
+    sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
+    assert len(list(sweep_dir.glob(f"{PLAN_PREFIX}*.json"))) == 2
+    assert sweep_progress(sweep_dir, "none_0/seed=0")[:2] == (1, 1)
+    assert sweep_progress(sweep_dir, "none_0/seed=1/algorithm.lambda_=0.5")[:2] == (2, 2)

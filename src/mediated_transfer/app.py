@@ -22,17 +22,13 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from . import progress, tracking
-from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, is_override, prepare_overrides
-from .config.spec import comparable, run_spec
+from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
+from .config.spec import check_same_run, run_spec
 from .identity import run_name, run_tags
 from .results import RunResult
 from .sweep import preflight
 
 log = logging.getLogger("mediated_transfer")
-
-INFORMATIONAL_FLAGS = ("-h", "--help", "--hydra-help", "-c", "--cfg", "-i", "--info", "--version", "--shell-completion")
-"""Flags that only print something: no checks, no preparation."""
-
 
 def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.PathLike | None = None,
             variant: str = "") -> dict:
@@ -46,12 +42,12 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
     folder = Path(folder)
     resolved = OmegaConf.to_container(cfg, resolve=True)
     assert isinstance(resolved, dict)
+    found = RunResult.read(folder) if RunResult.exists(folder) else None
     stale = None
-    if RunResult.exists(folder):
-        result = RunResult.read(folder)
-        _check_same_run(result, spec, folder)
-        stale = result.stale()
-    if RunResult.exists(folder) and not (stale and cfg.rerun_stale):
+    if found is not None:
+        check_same_run(found, spec, folder)
+        stale, result = found.stale(), found
+    if found is not None and not (stale and cfg.rerun_stale):
         status = "exists"
     else:
         from .run import execute_run
@@ -79,34 +75,11 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
         )
     label = f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
     sweep_name = f"{cfg.name}/{cfg.scale.name}"
+    run = "" if sweep_dir is None else folder.resolve().relative_to(Path(sweep_dir).resolve()).as_posix()
     log.info("%s", progress.run_line(label, result, status, sweep_name,
-                                     None if sweep_dir is None else Path(sweep_dir), stale))
+                                     None if sweep_dir is None else Path(sweep_dir), run, stale))
     return {"cell": str(cfg.cell), "seed": int(cfg.seed), "variant": variant, "status": status,
             "stale": stale, "reward_loss": result.reward_loss, "folder": str(folder)}
-
-
-def _check_same_run(result: RunResult, spec, folder: Path) -> None:
-    # A folder is named after the cell, the seed and the swept keys; a result computed with
-    # other values there (e.g. an override excluded from the folder name) must not be passed
-    # off as this run's.
-    if not result.config:
-        raise ConfigError(f"{folder / 'result.json'} has no recorded config; delete the folder to rerun it")
-    stored = comparable(run_spec(result.config))
-    wanted = comparable(spec)
-    differ = sorted(k for k in wanted if stored.get(k) != wanted[k])
-    if differ:
-        detail = "; ".join(_difference(k, stored.get(k), wanted[k]) for k in differ)
-        raise ConfigError(
-            f"{folder} holds a finished run of another configuration ({detail}). Use another "
-            "paths.root, or delete the folder to recompute it."
-        )
-
-
-def _difference(key: str, stored: Any, wanted: Any) -> str:
-    if isinstance(stored, dict) and isinstance(wanted, dict):
-        keys = sorted(k for k in set(stored) | set(wanted) if stored.get(k) != wanted.get(k))
-        return ", ".join(f"{key}.{k}: stored {stored.get(k)!r}, now {wanted.get(k)!r}" for k in keys)
-    return f"{key}: stored {stored!r}, now {wanted!r}"
 
 
 def _artifacts(folder: Path) -> list[Path]:
@@ -139,20 +112,28 @@ def main(cfg: DictConfig) -> dict:
 
 def cli(argv: Sequence[str] | None = None) -> Any:
     """``python -m mediated_transfer``: check the command, then Hydra's command line."""
+    # Hydra's own parser (private, no public one exists), so the command is read exactly as Hydra
+    # will read it: a command Hydra would refuse is refused here first, before any work.
+    from hydra._internal.utils import get_args_parser
+
     args = sys.argv[1:] if argv is None else list(argv)
-    overrides = [a for a in args if is_override(a)]
+    parsed = get_args_parser().parse_args(args)
     try:
-        quoted = iter(prepare_overrides(overrides))
-        if not any(a in INFORMATIONAL_FLAGS or a.startswith("--cfg=") for a in args):
-            preflight(overrides, multirun=any(a in ("-m", "--multirun") for a in args))
+        if parsed.config_name or parsed.config_path or parsed.config_dir:
+            raise ConfigError("--config-name/--config-path/--config-dir: this entry point composes "
+                              "conf/config.yaml; choose an experiment with experiment=<name>")
+        prepared = prepare_overrides(parsed.overrides)
+        # --version exits inside the parser; these only print something: nothing to check or prepare.
+        informational = (parsed.help or parsed.hydra_help or parsed.cfg or parsed.info
+                         or parsed.shell_completion)
+        if not informational:
+            preflight(parsed.overrides, multirun=parsed.multirun)
     except ConfigError as error:
         raise SystemExit(f"Invalid configuration: {error}") from None
     except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line
-        raise SystemExit(f"Could not prepare the runs: {type(error).__name__}: {_first_line(error)}") from None
-    sys.argv = [sys.argv[0], *(next(quoted) if is_override(a) else a for a in args)]
+        raise SystemExit(f"Could not prepare the runs: {type(error).__name__}: {first_line(error)}") from None
+    flags = list(args)
+    for override in parsed.overrides:  # the overrides, wherever they stood, replaced by their prepared form
+        flags.remove(override)
+    sys.argv = [sys.argv[0], *flags, *prepared]
     return main()
-
-
-def _first_line(error: BaseException) -> str:
-    lines = str(error).strip().splitlines()
-    return lines[0] if lines else ""

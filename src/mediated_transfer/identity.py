@@ -19,12 +19,12 @@ from .config.spec import spec_digest
 if TYPE_CHECKING:
     from .run import RunSpec
 
-BASELINE = "baseline"
+BASELINE_TAG = "baseline"
 """The variant tag of runs with no overrides beyond cell and seed."""
 
 
 def variant_label(variant: str) -> str:
-    return variant or BASELINE
+    return variant or BASELINE_TAG
 
 
 def run_name(cfg: DictConfig, variant: str) -> str:

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
-from .sweep import PLAN_FILE
+from .sweep import PLAN_PREFIX
 
 if TYPE_CHECKING:
     from .results import RunResult
@@ -32,8 +32,9 @@ def single_run_progress(spec: "RunSpec") -> Callable[[int, int], None]:
 
 
 def run_line(label: str, result: "RunResult", status: str, sweep_name: str, sweep_dir: Path | None,
-             stale: str | None = None) -> str:
-    """``[sweep k/n, ~time left] <label>: L_R=..., steps/s`` for a finished (or found) run."""
+             run: str = "", stale: str | None = None) -> str:
+    """``[sweep k/n, ~time left] <label>: L_R=..., steps/s`` for a finished (or found) run;
+    ``run`` is its folder below ``sweep_dir``."""
     if status == "exists":
         what = "found, skipped" if stale is None else f"found, STALE ({stale}; rerun_stale=true recomputes it)"
     else:
@@ -41,7 +42,7 @@ def run_line(label: str, result: "RunResult", status: str, sweep_name: str, swee
     line = f"{label}: L_R={result.reward_loss:.2f}, {what}"
     if sweep_dir is None:
         return line
-    count = sweep_progress(sweep_dir)
+    count = sweep_progress(sweep_dir, run)
     if count is None:
         return f"[{sweep_name}] {line}"
     finished, total, left = count
@@ -49,15 +50,22 @@ def run_line(label: str, result: "RunResult", status: str, sweep_name: str, swee
     return f"[{sweep_name} {finished}/{total}{eta}] {line}"
 
 
-def sweep_progress(sweep_dir: Path) -> tuple[int, int, float | None] | None:
-    """(finished runs, runs of the sweep, estimated seconds left), from the plan file written
-    before the sweep started and the result files present; None without a plan."""
-    try:
-        plan = json.loads((sweep_dir / PLAN_FILE).read_text())
-    except (OSError, ValueError):
+def sweep_progress(sweep_dir: Path, run: str) -> tuple[int, int, float | None] | None:
+    """(finished runs, runs of the launch, estimated seconds left), from the newest plan in
+    ``sweep_dir`` that lists ``run`` and the result files of its runs; None without one."""
+    plans = []
+    for path in sweep_dir.glob(f"{PLAN_PREFIX}*.json"):
+        try:
+            plan = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        if run in plan.get("runs", []):
+            plans.append(plan)
+    if not plans:
         return None
-    # Only this sweep's runs: other sweeps (variants) may share the folder.
-    files = [sweep_dir / run / "result.json" for run in plan.get("runs", [])]
+    plan = max(plans, key=lambda p: p["started"])
+    # Only this launch's runs: other sweeps (a variant) may share the folder.
+    files = [sweep_dir / r / "result.json" for r in plan["runs"]]
     results = [f.stat().st_mtime for f in files if f.is_file()]
     finished = min(len(results), plan["total"])
     # Only runs computed since this launch tell the current speed (earlier ones were skipped).

@@ -4,7 +4,9 @@ Every result records the git commit and whether the working tree was dirty (for 
 digest of the code of the source files that compute a run (for the staleness check): the world, the
 learners, the transfer strategies, the run loop and the metrics. A change to reporting,
 tracking, docs or configs does not make results stale; a change to anything a curve depends
-on does. Results of an older results format are stale too.
+on does. Results of an older results format are stale too. The digest covers this project's code
+only: another numpy, torch or pymunk version, or another Python (ast.dump may differ), is not
+seen, so it is a check for code changes, not a full environment record.
 """
 
 from __future__ import annotations
@@ -62,7 +64,8 @@ def staleness(recorded: dict[str, Any] | None, results_format: int | None) -> st
     if not recorded or recorded.get("digest") != current["digest"]:
         commit = (recorded or {}).get("commit") or "unknown"
         dirty = " (dirty)" if (recorded or {}).get("dirty") else ""
-        return f"computed by other code: commit {commit[:10]}{dirty}, now {str(current['commit'])[:10]}"
+        return (f"computed by other code: commit {commit[:10]}{dirty}, code digest "
+                f"{(recorded or {}).get('digest')}; now {str(current['commit'])[:10]}, {current['digest']}")
     return None
 
 

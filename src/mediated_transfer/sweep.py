@@ -10,12 +10,14 @@ writes the plan that progress lines count against.
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 import json
 import logging
 import time
 from collections import OrderedDict
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -26,21 +28,22 @@ from omegaconf import DictConfig, OmegaConf
 from . import tracking
 from .atomic import atomic_write_text
 from .config.compose import ConfigError, compose_config, prepare_overrides
-from .config.spec import run_spec
+from .config.spec import check_same_run, run_spec
+from .results import RunResult
 
 if TYPE_CHECKING:
     from .run import RunSpec
 
 log = logging.getLogger("mediated_transfer")
 
-PLAN_FILE = ".sweep_plan.json"
-"""Written into the sweep folder before the jobs start: how many runs the sweep has."""
+PLAN_PREFIX = ".sweep_plan."
+"""Plans are written into the sweep folder before the jobs start: which runs a launch has."""
 
 
 def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | None:
     """Check the command's config(s) and prepare a sweep; ConfigError (one line) if anything is
     wrong. Returns the sweep's job override lists, None for a single run."""
-    overrides = prepare_overrides(overrides)
+    overrides = prepare_overrides(overrides)  # also refuses an override Hydra cannot parse
     parsed = OverridesParser.create().parse_overrides(list(overrides))
     fixed = [o.input_line for o in parsed if not o.is_sweep_override()]
     base = compose_config(fixed, hydra=True)
@@ -52,18 +55,50 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
         return None
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
-    distinct = sorted({tuple(o for o in job if not o.startswith("seed=")) for job in jobs})
+    distinct = sorted({_without_seed(job) for job in jobs})
     configs = {job: compose_config(list(job), hydra=True) for job in distinct}
-    specs = [run_spec(cfg) for cfg in configs.values()]
+    specs = {job: run_spec(cfg) for job, cfg in configs.items()}
+    plans: dict[Path, list[str]] = {}
+    for job in jobs:
+        cfg = _with_seed(configs[_without_seed(job)], job)
+        sweep_dir, run = Path(cfg.hydra.sweep.dir), str(cfg.hydra.sweep.subdir).rstrip("/")
+        # A finished run of another configuration in a job's folder stops the sweep now, not
+        # as a traceback halfway through it.
+        folder = sweep_dir / run
+        if RunResult.exists(folder):
+            check_same_run(RunResult.read(folder), replace(specs[_without_seed(job)], seed=int(cfg.seed)), folder)
+        plans.setdefault(sweep_dir, []).append(run)
     _prepare_tracking(base)
-    _warm_source_task_cache(specs)
-    sweep_dir = Path(base.hydra.sweep.dir)
-    sweep_dir.mkdir(parents=True, exist_ok=True)
-    runs = [_run_folder(configs[tuple(o for o in job if not o.startswith("seed="))], job) for job in jobs]
-    plan = {"total": len(jobs), "started": time.time(), "runs": runs}
-    atomic_write_text(sweep_dir / PLAN_FILE, json.dumps(plan) + "\n")
-    log.info("sweep %s: %d runs in %s", base.name, len(jobs), sweep_dir)
+    _warm_source_task_cache(list(specs.values()))
+    for sweep_dir, runs in plans.items():
+        write_plan(sweep_dir, runs)
+        log.info("sweep %s: %d runs in %s", base.name, len(runs), sweep_dir)
     return jobs
+
+
+def write_plan(sweep_dir: Path, runs: list[str]) -> Path:
+    """The plan of one launch into one sweep folder: its runs' folders and when it started.
+    Named after its runs, so sweeps that share the folder (a baseline and a variant) keep
+    their own plans."""
+    sweep_dir.mkdir(parents=True, exist_ok=True)
+    name = hashlib.sha256("\n".join(runs).encode()).hexdigest()[:12]
+    path = sweep_dir / f"{PLAN_PREFIX}{name}.json"
+    atomic_write_text(path, json.dumps({"total": len(runs), "started": time.time(), "runs": runs}) + "\n")
+    return path
+
+
+def _without_seed(job: Sequence[str]) -> tuple[str, ...]:
+    # Seeds do not change whether a config is valid: one composition per distinct rest.
+    return tuple(o for o in job if not o.startswith("seed="))
+
+
+def _with_seed(cfg: DictConfig, job: Sequence[str]) -> DictConfig:
+    seed = next((o.split("=", 1)[1] for o in job if o.startswith("seed=")), None)
+    if seed is None:
+        return cfg
+    cfg = cfg.copy()
+    OmegaConf.update(cfg, "seed", int(seed))
+    return cfg
 
 
 def planned_jobs(config: DictConfig, overrides: Sequence[str] | None = None) -> list[list[str]]:
@@ -83,15 +118,6 @@ def planned_jobs(config: DictConfig, overrides: Sequence[str] | None = None) -> 
         else:
             raise ConfigError(f"{override.input_line}: interval sweeps need a sweeper plugin (e.g. tuning)")
     return [list(job) for job in itertools.product(*choices.values())]
-
-
-def _run_folder(cfg: DictConfig, job: Sequence[str]) -> str:
-    """The job's folder below the sweep folder (hydra.sweep.subdir, resolved for its seed)."""
-    seed = next((o.split("=", 1)[1] for o in job if o.startswith("seed=")), None)
-    if seed is not None:
-        cfg = cfg.copy()
-        OmegaConf.update(cfg, "seed", int(seed))
-    return str(cfg.hydra.sweep.subdir).rstrip("/")
 
 
 def _is_hydra_override(override: str) -> bool:

@@ -22,6 +22,7 @@ from typing import Any
 
 from hydra import compose, initialize_config_dir
 from hydra.core.global_hydra import GlobalHydra
+from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.errors import HydraException, MissingConfigException
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
@@ -42,14 +43,10 @@ class ConfigError(ValueError):
 # --- overrides as typed on the command line ------------------------------------------------------
 
 
-def is_override(arg: str) -> bool:
-    """Hydra override (``key=value``, ``+key=value``, ``~key``), not a flag or a flag's value."""
-    return not arg.startswith("-") and ("=" in arg or arg.startswith("~"))
-
-
 def prepare_overrides(overrides: Sequence[str]) -> list[str]:
-    """Quote numeric group choices (``n_source=7`` -> ``n_source='7'``) and register the
-    options Hydra cannot find in conf/ (any N_source >= 0).
+    """Numeric group choices as Hydra needs them (``n_source=7`` -> ``n_source='7'``, also in
+    sweeps: ``n_source=1,7``, ``choice(1,7)``, ``range(1,3)``), with an option registered for
+    any N_source >= 0 that conf/ has no file for; a misspelt ``tuned`` choice refused.
 
     Hydra reads an unquoted 7 as the integer 7 and rejects it as a group choice, whose options
     are names; quoting keeps the natural spelling usable.
@@ -57,14 +54,31 @@ def prepare_overrides(overrides: Sequence[str]) -> list[str]:
     out = []
     for arg in overrides:
         _check_tuned_choice(arg)
-        match = re.fullmatch(r"([\w.]+)=(\d+(?:,\d+)*)", arg)
-        if match and match.group(1) in NUMERIC_GROUPS:
-            values = [int(v) for v in match.group(2).split(",")]
-            present = {p.stem for p in (CONF_DIR / match.group(1)).glob("*.yaml")}
-            schema.register_n_source([v for v in values if str(v) not in present])
-            arg = f"{match.group(1)}=" + ",".join(f"'{v}'" for v in values)
-        out.append(arg)
+        try:
+            [override] = OverridesParser.create().parse_overrides([arg])
+        except HydraException as error:
+            raise ConfigError(f"{arg}: {first_line(str(error))}") from None
+        group = override.get_key_element()
+        if group not in NUMERIC_GROUPS or override.is_delete():
+            out.append(arg)
+            continue
+        if override.is_sweep_override() and not override.is_discrete_sweep():
+            raise ConfigError(f"{arg}: {group} takes integers; sweep them as a list or range")
+        texts = list(override.sweep_string_iterator()) if override.is_sweep_override() \
+            else [override.get_value_element_as_str()]
+        values = [_numeric_choice(group, text.strip().strip("'\"").strip()) for text in texts]
+        present = {p.stem for p in (CONF_DIR / group).glob("*.yaml")}
+        schema.register_n_source([v for v in values if str(v) not in present])
+        out.append(f"{group}=" + ",".join(f"'{v}'" for v in values))
     return out
+
+
+def _numeric_choice(group: str, text: str) -> int:
+    if not text.isdigit():
+        options = sorted((p.stem for p in (CONF_DIR / group).glob("*.yaml")), key=int)
+        raise ConfigError(f"{group}={text}: no such option; allowed: {', '.join(options)}, "
+                          "or any other integer >= 0")
+    return int(text)
 
 
 def _check_tuned_choice(arg: str) -> None:
@@ -111,14 +125,14 @@ def one_line(error: BaseException) -> str:
         options = sorted(error.options or [], key=lambda o: (not o.isdigit(), int(o) if o.isdigit() else 0, o))
         if group:
             return f"{group}={option}: no such option; allowed: {', '.join(options)}"
-        return _first_line(str(error))
-    text = _first_line(str(error))
+        return first_line(str(error))
+    text = first_line(str(error))
     cause = error.__cause__ or error.__context__
     unknown = re.match(r"Could not override '([\w.]+)'", text)
     if unknown and cause is not None and "not in" in str(cause):
         return _unknown_key_message(unknown.group(1), _schema_fields(str(cause)))
     if cause is not None and str(cause).strip():
-        detail = _first_line(str(cause))
+        detail = first_line(str(cause))
         full_key = re.search(r"full_key: (\S+)", str(cause))
         if full_key and full_key.group(1) not in text + detail:
             detail += f" (key {full_key.group(1)})"
@@ -126,7 +140,9 @@ def one_line(error: BaseException) -> str:
     return text
 
 
-def _first_line(text: str) -> str:
+def first_line(text: str | BaseException) -> str:
+    """The first non-empty line of a (multi-line) message."""
+    text = str(text)
     lines = [line.strip() for line in text.strip().splitlines() if line.strip()]
     return lines[0] if lines else text.strip()
 

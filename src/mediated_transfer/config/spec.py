@@ -6,6 +6,7 @@ import hashlib
 import json
 from collections.abc import Mapping
 from dataclasses import asdict
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from omegaconf import DictConfig, OmegaConf
@@ -13,6 +14,7 @@ from omegaconf import DictConfig, OmegaConf
 from .compose import ConfigError
 
 if TYPE_CHECKING:
+    from ..results import RunResult
     from ..run import RunSpec
 
 
@@ -66,3 +68,28 @@ def spec_digest(spec: "RunSpec") -> str:
 
 def _plain(node: Any) -> Any:
     return OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node
+
+
+def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
+    """ConfigError naming every difference if ``folder``'s result was computed from another config."""
+    # A folder is named after the cell, the seed and the swept keys; a result computed with
+    # other values there (e.g. an override excluded from the folder name) must not be passed
+    # off as this run's.
+    if not result.config:
+        raise ConfigError(f"{folder / 'result.json'} has no recorded config; delete the folder to rerun it")
+    stored = comparable(run_spec(result.config))
+    wanted = comparable(spec)
+    differ = sorted(k for k in wanted if stored.get(k) != wanted[k])
+    if differ:
+        detail = "; ".join(_difference(k, stored.get(k), wanted[k]) for k in differ)
+        raise ConfigError(
+            f"{folder} holds a finished run of another configuration ({detail}). Use another "
+            "paths.root, or delete the folder to recompute it."
+        )
+
+
+def _difference(key: str, stored: Any, wanted: Any) -> str:
+    if isinstance(stored, dict) and isinstance(wanted, dict):
+        keys = sorted(k for k in set(stored) | set(wanted) if stored.get(k) != wanted.get(k))
+        return ", ".join(f"{key}.{k}: stored {stored.get(k)!r}, now {wanted.get(k)!r}" for k in keys)
+    return f"{key}: stored {stored!r}, now {wanted!r}"

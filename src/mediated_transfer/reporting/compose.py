@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import OmegaConfBaseException
 
-from ..config.compose import CONF_DIR, ConfigError, compose_config
+from ..config.compose import CONF_DIR, ConfigError, compose_config, first_line
 from .collect import BASELINE
 
 
@@ -54,12 +54,8 @@ def variant_of(cfg: DictConfig) -> str:
 def one_line(error: BaseException) -> str:
     """``error`` as one line: its key, if it names one, and the first line of its message."""
     if isinstance(error, OmegaConfBaseException) and error.full_key:
-        return f"{error.full_key}: {_first_line(error.msg or str(error))}"
-    return _first_line(str(error)) or type(error).__name__
-
-
-def _first_line(text: str) -> str:
-    return next((line.strip() for line in text.splitlines() if line.strip()), "")
+        return f"{error.full_key}: {first_line(error.msg or str(error))}"
+    return first_line(str(error)) or type(error).__name__
 
 
 USER_ERRORS = (ReportError, ConfigError, OmegaConfBaseException, OSError, ValueError)
