@@ -9,7 +9,7 @@ BENCH_STAMP := $(VENV)/.installed-bench
 .PHONY: help install test bench
 
 help: ## List the targets
-	@grep -E '^[a-zA-Z_-]+:.*?## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*?## "}; {printf "  %-18s %s\n", $$1, $$2}'
+	@grep -E '^[a-zA-Z0-9_-]+:.*?## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*?## "}; {printf "  %-18s %s\n", $$1, $$2}'
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -37,7 +37,7 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot table1
+.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot refine table1
 
 reproduce-tables: $(STAMP) ## Run the Tables II-IV sweeps at SCALE=paper|quick|smoke (resumable), then build reports/
 	@for experiment in $(EXPERIMENTS); do \
@@ -65,6 +65,9 @@ tune-snapshot: $(STAMP) ## Stage for git a consistent copy of LEARNER's (running
 	@# Staged from the copy: the live files may change while a worker writes them.
 	git update-index --add --cacheinfo 100644,$$(git hash-object -w $(SNAPSHOT)/study.db),tuning/$(LEARNER)/study.db
 	git update-index --add --cacheinfo 100644,$$(git hash-object -w $(SNAPSHOT)/trials.csv),tuning/$(LEARNER)/trials.csv
+
+refine: $(STAMP) ## Manual refinement of LEARNER=rbf|fsr: named candidates on 10 tuning seeds (resumable; WORKERS=1)
+	$(BIN)/python -m mediated_transfer.tuning.refine $(LEARNER) --workers $(WORKERS) $(ARGS)
 
 table1: $(STAMP) ## Build reports/table1.md and its figures from the committed tuning/*/trials.csv
 	$(BIN)/python -m mediated_transfer.tuning.table1 $(ARGS)
