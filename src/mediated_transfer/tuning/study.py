@@ -183,8 +183,15 @@ def work(plan: StudyPlan) -> None:
         if counts[TrialState.WAITING] == 0 and counts[TrialState.COMPLETE] + counts[TrialState.RUNNING] >= plan.trials:
             time.sleep(POLL_S)
             continue
-        study.optimize(objective(plan.space), n_trials=1,
-                       callbacks=[lambda s, t: after_trial(plan, s, t, started)])
+        try:
+            study.optimize(objective(plan.space), n_trials=1,
+                           callbacks=[lambda s, t: after_trial(plan, s, t, started)])
+        except ValueError as error:
+            # Two workers that start together can both pop the one queued (retried) trial from
+            # SQLite; the second to finish finds it COMPLETE. Its result is the same (same values,
+            # same seeds), so it is dropped and the worker goes on.
+            if "Cannot tell a COMPLETE trial" not in str(error):
+                raise
 
 
 def after_trial(plan: StudyPlan, study: optuna.Study, trial, started: float) -> None:
