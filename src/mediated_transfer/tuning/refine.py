@@ -26,7 +26,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from .objective import first_step_at_threshold, learning_span, run_seed
-from .space import SEARCH_SPACE_DIR, SearchSpace, SearchSpaceError, find_search_space, override_value
+from .space import SEARCH_SPACE_DIR, SearchSpace, SearchSpaceError, find_search_space
 
 REFINE_FILE = "refine.csv"
 COLUMNS = ["candidate", "seed", "reward_loss", "first_target_reward_step", "first_threshold_step",
@@ -78,9 +78,7 @@ def load_refinement(learner: str, folder: Path = SEARCH_SPACE_DIR, scale: str | 
 
 def run_one(space: SearchSpace, candidate: Candidate, seed: int) -> dict[str, Any]:
     """One run of a candidate at a tuning seed, as a row of refine.csv."""
-    searched = [f"{k}={override_value(v)}" for k, v in candidate.values.items()]
-    overrides = [*space.base, f"scale={space.scale}", "tracking=none", f"seed={seed}", *searched]
-    result, threshold = run_seed(overrides)
+    result, threshold = run_seed(space.run_overrides(candidate.values, seed))
     at_threshold = first_step_at_threshold(result.steps, result.mean_reward, threshold)
     return {
         "candidate": candidate.name, "seed": seed, "reward_loss": result.reward_loss,

@@ -10,7 +10,6 @@ launch, so no trial is lost. The provisional defaults are queued as the first tr
 
 from __future__ import annotations
 
-import math
 import multiprocessing
 import statistics
 import time
@@ -22,6 +21,7 @@ import optuna
 from optuna.storages import RDBStorage, RetryHeartbeatStaleTrialCallback, fail_stale_trials
 from optuna.trial import TrialState
 
+from ..progress import duration
 from ..tracking import TrackingSettings
 from . import mlflow_log
 from .export import STUDY_FILE, write_trials_csv
@@ -219,18 +219,10 @@ def progress_line(plan: StudyPlan, trial, finished: list) -> str:
     left = max(plan.trials - len(finished), 0) * statistics.median(durations) / plan.workers
     per_seed = ", ".join(f"{v:.1f}" for v in trial.user_attrs["reward_loss"])
     defaults = _defaults_objective(finished)
-    return (f"[{plan.name} {len(finished)}/{plan.trials}, ~{_duration(left)} left] "
+    return (f"[{plan.name} {len(finished)}/{plan.trials}, ~{duration(left)} left] "
             f"trial {trial.number} ({trial.user_attrs.get('role')}): L_R {trial.value:.1f} "
             f"(seeds {per_seed}); best {best.value:.1f} (trial {best.number})"
             + ("" if defaults is None else f", defaults {defaults:.1f}"))
-
-
-def _duration(seconds: float) -> str:
-    if not math.isfinite(seconds):
-        return "?"
-    minutes, _ = divmod(int(round(seconds)), 60)
-    hours, minutes = divmod(minutes, 60)
-    return f"{hours}h{minutes:02d}m" if hours else f"{minutes}m"
 
 
 def run_study(plan: StudyPlan) -> optuna.Study:
