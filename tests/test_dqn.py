@@ -318,3 +318,85 @@ def test_speed_bench_runs_side_by_side():
     assert result["network_parameters"] == DQNLearner(cfg).network.flat.numel()
     for key in ("ours_steps_per_s", "sb3_steps_per_s", "ratio", "update_flop_fraction"):
         assert np.isfinite(result[key]) and result[key] > 0
+
+
+# --- the fast kernels against the reference (algorithm.kernels) ------------------------------
+def twin_learners(seed: int = 1, **overrides) -> tuple[DQNLearner, DQNLearner]:
+    """A fast and a reference learner with the same weights, replay contents and random state,
+    and a target network that differs from the online one."""
+    fast = DQNLearner(small_config(kernels="fast", **overrides), seed=seed)
+    reference = DQNLearner(small_config(kernels="reference", **overrides), seed=seed)
+    for learner in (fast, reference):
+        fill_buffer(learner, 200)
+        with torch.no_grad():
+            learner.target_network.flat.add_(0.05 * torch.randn(
+                learner.target_network.flat.shape, generator=torch.Generator().manual_seed(9)))
+    return fast, reference
+
+
+@pytest.mark.parametrize("max_grad_norm", [None, 0.05])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_fast_update_equals_the_reference(max_grad_norm, seed):
+    """Step by step, on the same batches: the same loss, gradient norm (before clipping; 0.05
+    bites), Adam state and weights, up to float32 rounding. Weights are compared against one
+    Adam step's size: Adam divides by sqrt(v), so a gradient element that is float32 noise
+    (a sum cancelling to ~1e-7) still moves its weight by a rounding-dependent fraction of lr."""
+    fast, reference = twin_learners(seed, batch_size=16, max_grad_norm=max_grad_norm)
+    lr = fast.config.learning_rate
+    for _ in range(4):
+        batch = fast.buffer.sample(fast.rng)
+        same = reference.buffer.sample(reference.rng)
+        np.testing.assert_array_equal(batch["rows"], same["rows"])
+        assert fast.update(batch) == pytest.approx(reference.update(same), rel=1e-5)
+        assert fast.update.grad_norm == pytest.approx(reference.update.grad_norm, rel=1e-4)
+        assert fast.update.adam_steps == reference.update.adam_steps
+        torch.testing.assert_close(fast.update.adam_mean, reference.update.adam_mean,
+                                   rtol=1e-3, atol=1e-5 * float(reference.update.adam_mean.abs().max()))
+        difference = (fast.network.flat - reference.network.flat).abs().detach()
+        assert float(difference.max()) < 0.05 * lr
+        assert float(difference.mean()) < 1e-4 * lr
+
+
+def test_reference_greedy_action_equals_the_fast_one():
+    fast, reference = twin_learners(3)
+    for o in random_observations(np.random.default_rng(4), 30):
+        np.testing.assert_allclose(fast.q_values(o), reference.q_values(o), rtol=1e-5, atol=1e-5)
+        assert fast.act(o, explore=False) == reference.act(o, explore=False)
+
+
+def test_fast_update_sees_a_changed_target_network():
+    """The fast kernels keep the target network transposed; any write to it must reach them."""
+    fast, reference = twin_learners(5)
+    for learner in (fast, reference):
+        learner.update(learner.buffer.sample(learner.rng))
+        with torch.no_grad():
+            learner.target_network.flat.mul_(-2.0)
+    assert fast.update(fast.buffer.sample(fast.rng)) == pytest.approx(
+        reference.update(reference.buffer.sample(reference.rng)), rel=1e-5)
+
+
+@pytest.mark.parametrize("saved, loaded", [("fast", "reference"), ("reference", "fast")])
+def test_checkpoints_move_between_kernels(saved, loaded):
+    learner = DQNLearner(small_config(kernels=saved), seed=4)
+    run_chain(learner, 300)
+    resumed = DQNLearner(small_config(kernels=loaded), seed=99)
+    resumed.load_state_dict(learner.state_dict())
+    assert resumed.stats == learner.stats
+    assert torch.equal(resumed.network.flat, learner.network.flat)
+    assert torch.equal(resumed.update.adam_sq_mean, learner.update.adam_sq_mean)
+    assert resumed.update.adam_steps == learner.update.adam_steps
+    # The next update starts from the same state: equal up to float32 rounding.
+    assert resumed.update(resumed.buffer.sample(resumed.rng)) == pytest.approx(
+        learner.update(learner.buffer.sample(learner.rng)), rel=1e-5)
+
+
+def test_reference_kernels_learn_the_chain():
+    learner = DQNLearner(small_config(kernels="reference"), seed=0)
+    run_chain(learner, 2_000)
+    env = ChainMDP()
+    assert [learner.act(env.observation(s), explore=False) for s in range(env.n - 1)] == [RIGHT] * (env.n - 1)
+
+
+def test_unknown_kernels_are_refused_naming_the_choices():
+    with pytest.raises(ValueError, match=r"algorithm\.kernels must be fast or reference"):
+        DQNConfig(kernels="turbo")

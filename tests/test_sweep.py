@@ -256,6 +256,25 @@ def test_comments_and_docstrings_do_not_make_results_stale(tmp_path):
     assert source_digest(tmp_path) != source_digest()
 
 
+def test_a_change_to_one_learner_leaves_the_other_learners_results_current(tmp_path):
+    import shutil
+
+    from mediated_transfer.provenance import PACKAGE, source_digest
+
+    for entry in ("env", "learners", "transfer"):
+        shutil.copytree(PACKAGE / entry, tmp_path / entry, ignore=shutil.ignore_patterns("__pycache__"))
+    for entry in ("run.py", "metrics.py", "results.py"):
+        shutil.copy(PACKAGE / entry, tmp_path / entry)
+    kernels = tmp_path / "learners" / "dqn_kernels.py"
+    kernels.write_text(kernels.read_text().replace("self.adam_steps += 1", "self.adam_steps += 2"))
+    assert source_digest(tmp_path, "linear_q") == source_digest(algorithm="linear_q")
+    assert source_digest(tmp_path, "dqn") != source_digest(algorithm="dqn")
+    assert source_digest(tmp_path) != source_digest()  # all of the code
+    world = tmp_path / "env" / "world.py"
+    world.write_text(world.read_text() + "\nCHANGED = 1\n")
+    assert source_digest(tmp_path, "linear_q") != source_digest(algorithm="linear_q")
+
+
 def test_a_sweep_refuses_a_folder_of_another_configuration_before_any_run(root, source_cache):
     common = ["-m", "cell=none_0", "seed=0,1", "hydra/launcher=basic", "tracking=none", "experiment=table2_rbf",
               *_common(root, source_cache)]

@@ -24,22 +24,40 @@ RESULTS_FORMAT = 2
 PACKAGE = Path(__file__).resolve().parent
 COMPUTING_SOURCES = ("env", "learners", "transfer", "run.py", "metrics.py", "results.py")
 """What a run's curve depends on, relative to the package."""
+LEARNER_SOURCES = {
+    "linear_q": ("learners/linear_q.py", "learners/rbf.py", "learners/fsr.py",
+                 "learners/_distance_ranges.py"),
+    "dqn": ("learners/dqn.py", "learners/dqn_kernels.py"),
+}
+"""Learner files that only one algorithm runs: a change to the DQN does not make linear
+results stale, nor the other way round."""
 
 
 @functools.cache
-def code_version() -> dict[str, Any]:
-    """``{"commit", "dirty", "digest"}`` of the code in this process (commit/dirty None without git)."""
-    return {"commit": _git("rev-parse", "HEAD"), "dirty": _dirty(), "digest": source_digest()}
+def code_version(algorithm: str | None = None) -> dict[str, Any]:
+    """``{"commit", "dirty", "digest"}`` of the code in this process (commit/dirty None without
+    git); with ``algorithm``, the digest covers only the code that runs it, and the record
+    says so (``"algorithm"``)."""
+    version = {"commit": _git("rev-parse", "HEAD"), "dirty": _dirty(),
+               "digest": source_digest(algorithm=algorithm)}
+    if algorithm is not None:
+        version["algorithm"] = algorithm
+    return version
 
 
-def source_digest(package: Path = PACKAGE) -> str:
-    """Digest of the computing sources' syntax trees: comments, docstrings and layout do not
-    change what a run computes, so they do not change the digest."""
+def source_digest(package: Path = PACKAGE, algorithm: str | None = None) -> str:
+    """Digest of the computing sources' syntax trees, without the files only other algorithms
+    run: comments, docstrings and layout do not change what a run computes, so they do not
+    change the digest."""
+    others = {file for name, files in LEARNER_SOURCES.items() if algorithm is not None
+              and name != algorithm for file in files}
     digest = hashlib.sha256()
     for entry in COMPUTING_SOURCES:
         path = package / entry
         files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
         for file in files:
+            if file.relative_to(package).as_posix() in others:
+                continue
             digest.update(file.relative_to(package).as_posix().encode())
             digest.update(_code_of(file.read_text()).encode())
     return digest.hexdigest()[:16]
@@ -60,7 +78,7 @@ def staleness(recorded: dict[str, Any] | None, results_format: int | None) -> st
     """Why a result recorded with ``recorded`` code is stale now; None when it is current."""
     if results_format != RESULTS_FORMAT:
         return f"results format {results_format or 1}, current {RESULTS_FORMAT}"
-    current = code_version()
+    current = code_version((recorded or {}).get("algorithm"))
     if not recorded or recorded.get("digest") != current["digest"]:
         commit = (recorded or {}).get("commit") or "unknown"
         dirty = " (dirty)" if (recorded or {}).get("dirty") else ""

@@ -205,7 +205,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         wall_time_s=wall,
         learning_steps_per_s=spec.budget / learn_time if learn_time > 0 else math.inf,
         learner_stats=dict(learner.stats),
-        code=code_version(),
+        code=code_version(spec.algorithm),
         results_format=RESULTS_FORMAT,
     )
 

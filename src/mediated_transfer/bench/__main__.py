@@ -17,8 +17,9 @@ PARTS = {
     "env": "mediated_transfer.bench.env_speed",
     "linear": "mediated_transfer.bench.learner_speed",
     "dqn": "mediated_transfer.bench.dqn_speed",
+    "projection": "mediated_transfer.bench.projection",
 }
-DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000}
+DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "projection": None}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,7 +29,7 @@ import gymnasium
 import torch
 
 from ..env.task import NUM_DISTANCES
-from ..learners.dqn import DQNConfig, DQNLearner, forward_flops
+from ..learners.dqn import DQNConfig, DQNLearner, forward_flops, update_flops
 
 WARMUP_STEPS = 2_000
 ROUNDS = 5
@@ -171,7 +171,7 @@ def run(steps: int = 5_000, *, config: DQNConfig | None = None,
 
     # Update FLOP rate against plain matmul, alternating.
     learner = ours.learner
-    update_flops = learner.update.flops()
+    flops = update_flops(config)
     n_updates = 50
     update_s, sb3_update_s, matmul_rates = [], [], []
     for _ in range(rounds):
@@ -179,7 +179,7 @@ def run(steps: int = 5_000, *, config: DQNConfig | None = None,
                                         for _ in range(n_updates)]) / n_updates)
         sb3_update_s.append(_timed(lambda: sb3.train(n_updates, config.batch_size)) / n_updates)
         matmul_rates.append(matmul_gflops())
-    update_gflops = update_flops / statistics.median(update_s) / 1e9
+    update_gflops = flops / statistics.median(update_s) / 1e9
     matmul_rate = statistics.median(matmul_rates)
 
     result = {
@@ -195,7 +195,7 @@ def run(steps: int = 5_000, *, config: DQNConfig | None = None,
         "ratio": statistics.median(ratios),
         "ours_update_us": statistics.median(update_s) * 1e6,
         "sb3_update_us": statistics.median(sb3_update_s) * 1e6,
-        "update_mflop": update_flops / 1e6,
+        "update_mflop": flops / 1e6,
         "update_gflops": update_gflops,
         "matmul_gflops": matmul_rate,
         "update_flop_fraction": update_gflops / matmul_rate,
@@ -209,7 +209,7 @@ def run(steps: int = 5_000, *, config: DQNConfig | None = None,
             f"{config.train_frequency} steps, buffer {config.buffer_size}, {config.torch_threads} "
             f"torch thread(s); median of {rounds} alternating rounds of {chunk} steps\n"
             f"  one update: ours {result['ours_update_us']:.0f} us, SB3 {result['sb3_update_us']:.0f} us; "
-            f"ours {update_flops / 1e6:.1f} MFLOP at {update_gflops:.1f} GFLOP/s = "
+            f"ours {flops / 1e6:.1f} MFLOP at {update_gflops:.1f} GFLOP/s = "
             f"{result['update_flop_fraction']:.0%} of a {MATMUL_SIZE}x{MATMUL_SIZE} matmul's "
             f"{matmul_rate:.1f} GFLOP/s",
             flush=True,

@@ -1,5 +1,5 @@
-"""The paper's deep Q-learner (Sec. V, Fig. 2; Mnih et al. 2015): network, replay buffer,
-update, learner.
+"""The paper's deep Q-learner (Sec. V, Fig. 2; Mnih et al. 2015), in the order it runs: config,
+network, replay buffer, the learning step, the learner.
 
 The network sees the sensor vector of eq. (2) in two parts: the 6 distances pass through 3
 fully connected ReLU layers of 256 units; the 5-dim one-hot of the active picking location,
@@ -9,16 +9,10 @@ values; transitions go into a replay buffer of size E and learning starts once i
 of them; Adam with a constant learning rate minimises the Huber loss of the TD error; epsilon
 decays linearly from 1 to 0.1.
 
-Speed (660 runs of 500k learning steps on two cores) shapes the implementation, not the maths:
-- all weights of a network live in one flat vector, so the target copy is one vector copy and
-  Adam one fused pass (numba) instead of one per tensor;
-- the update runs forward and backward by hand on preallocated buffers (torch matrix
-  products, small numba kernels for the rest): for a 4-layer MLP on a batch of 32, autograd's
-  and the optimiser's bookkeeping cost more than the matrix products themselves;
-- acting reads the live weights through numpy views (no copy, always current) in a compiled
-  loop: ~10 us where a torch forward of one observation costs ~50-100 us.
-``QNetwork.forward`` is the plain autograd reference of the same function; the tests check
-that the hand-written update agrees with autograd + ``torch.optim.Adam``.
+The learning step and the greedy action are written here plainly (autograd,
+``torch.optim.Adam``, ``clip_grad_norm_``): ``algorithm.kernels=reference``. The default,
+``algorithm.kernels=fast``, runs the same functions as hand-written kernels
+(``dqn_kernels.py``), tested equal to these.
 """
 
 from __future__ import annotations
@@ -28,7 +22,6 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
-import numba
 import numpy as np
 import torch
 import torch.nn.functional as F
@@ -38,6 +31,7 @@ from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
 from .rng_state import restore_rng_state, rng_state_words
 
 NUM_BINARY = OBSERVATION_SIZE - NUM_DISTANCES
+KERNELS = ("fast", "reference")
 
 
 # --------------------------------------------------------------------------------------------
@@ -88,6 +82,10 @@ class DQNConfig:
     """Adam's denominator guard (torch default)."""
     torch_threads: int = 1
     """torch intra-op threads (process-wide); 1 because runs are parallelised across processes."""
+    kernels: str = "fast"
+    """How the update and the greedy action are computed: ``fast`` (hand-written kernels,
+    dqn_kernels.py) or ``reference`` (autograd and torch.optim.Adam, ~3x slower). The same
+    functions: curves differ only by float32 rounding."""
 
     def __post_init__(self) -> None:
         def fail(key: str, allowed: str) -> None:
@@ -118,6 +116,8 @@ class DQNConfig:
                 fail(key, "in [0, 1)")
         if not self.adam_epsilon > 0:
             fail("adam_epsilon", "> 0")
+        if self.kernels not in KERNELS:
+            fail("kernels", " or ".join(KERNELS))
         if self.buffer_size < self.batch_size:
             raise ValueError(
                 f"algorithm.buffer_size ({self.buffer_size}) must be >= algorithm.batch_size "
@@ -150,6 +150,13 @@ def forward_flops(hidden_size: int, num_hidden_layers: int, num_actions: int) ->
     """Floating-point operations (2 per multiply-add) of one observation's forward pass."""
     shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions)
     return sum(2 * out * inp for out, inp in shapes)
+
+
+def update_flops(config: DQNConfig, num_actions: int = 11) -> int:
+    """Nominal FLOPs of one update: the online forward of the batch, its backward (~2x) and the
+    target network's forward, i.e. 4 forward passes of the batch."""
+    return 4 * config.batch_size * forward_flops(config.hidden_size, config.num_hidden_layers,
+                                                 num_actions)
 
 
 class QNetwork(nn.Module):
@@ -215,6 +222,7 @@ class ReplayBuffer:
         self._batch = np.zeros((batch_size, self.WIDTH), np.float32)
         rows = torch.from_numpy(self._batch)
         self.batch = {
+            "rows": self._batch,  # all of it, as numpy (the fast kernels unpack it themselves)
             "observations": rows[:, self.OBSERVATION],
             "actions": rows[:, self.ACTION],  # float32 (exact for action indices)
             "rewards": rows[:, self.REWARD],
@@ -233,7 +241,7 @@ class ReplayBuffer:
         self.position = (self.position + 1) % self.capacity
         self.size = min(self.size + 1, self.capacity)
 
-    def sample(self, rng: np.random.Generator) -> dict[str, torch.Tensor]:
+    def sample(self, rng: np.random.Generator) -> dict:
         """A uniform batch (with replacement), written into the shared batch tensors."""
         index = rng.integers(0, self.size, len(self._batch))
         np.take(self.transitions, index, axis=0, out=self._batch)
@@ -241,234 +249,69 @@ class ReplayBuffer:
 
 
 # --------------------------------------------------------------------------------------------
-# Update: TD error, hand-written backward pass, Adam
+# The learning step: Huber loss of the TD error, autograd, clipping, Adam (the reference)
 # --------------------------------------------------------------------------------------------
-@numba.njit(fastmath=True, error_model="numpy", cache=True)
-def _adam_step(params, grad, mean, sq_mean, step_size, beta1, beta2, eps, bias2, max_norm):
-    """One Adam step (torch.optim.Adam's formula) on flat vectors, after clipping ``grad`` to
-    global L2 norm ``max_norm`` (<= 0: no clipping). ``step_size`` = lr / (1 - beta1^t),
-    ``bias2`` = 1 / (1 - beta2^t). Returns the gradient norm before clipping."""
-    total = np.float32(0.0)
-    for i in range(grad.size):
-        total += grad[i] * grad[i]
-    norm = np.sqrt(np.float64(total))
-    scale = np.float32(1.0)
-    if max_norm > 0 and norm > max_norm:
-        scale = np.float32(max_norm / (norm + 1e-6))  # the guard as in torch's clip_grad_norm_
-    one = np.float32(1.0)
-    for i in range(params.size):
-        g = grad[i] * scale
-        m = beta1 * mean[i] + (one - beta1) * g
-        v = beta2 * sq_mean[i] + (one - beta2) * g * g
-        mean[i] = m
-        sq_mean[i] = v
-        params[i] -= step_size * m / (np.sqrt(v * bias2) + eps)
-    return norm
-
-
-@numba.njit(fastmath=True, error_model="numpy", cache=True)
-def _huber_td_gradient(q, target_q, actions, rewards, bootstrap, gamma, huber_delta,
-                       delta_q, head_bias_grad):
-    """dLoss/dQ of the mean Huber loss of the TD errors into ``delta_q`` (nonzero only at the
-    taken action), and its column sums (the head's bias gradient); returns the loss.
-    y = r + gamma * bootstrap * max_a' Q_target(s', a'); the Huber loss's derivative is the TD
-    error clipped to [-delta, delta]."""
-    batch, num_actions = q.shape
-    loss = 0.0
-    head_bias_grad[:] = 0.0
-    delta_q[:] = 0.0
-    for i in range(batch):
-        best = target_q[i, 0]
-        for a in range(1, num_actions):
-            best = max(best, target_q[i, a])
-        action = int(actions[i])
-        td = q[i, action] - (rewards[i] + gamma * bootstrap[i] * best)
-        if abs(td) <= huber_delta:
-            loss += 0.5 * td * td
-        else:
-            loss += huber_delta * (abs(td) - 0.5 * huber_delta)
-        grad = min(max(td, -huber_delta), huber_delta) / batch
-        delta_q[i, action] = grad
-        head_bias_grad[action] += grad
-    return loss / batch
-
-
-@numba.njit(fastmath=True, error_model="numpy", cache=True)
-def _relu_backward(delta, activation, bias_grad):
-    """Pass ``delta`` back through a ReLU (zero where the unit was inactive, in place) and sum it
-    over the batch into the layer's bias gradient."""
-    batch, width = delta.shape
-    bias_grad[:] = 0.0
-    for i in range(batch):
-        for j in range(width):
-            if activation[i, j] <= 0.0:
-                delta[i, j] = 0.0
-            bias_grad[j] += delta[i, j]
-
-
-class TDUpdate:
-    """One gradient step of deep Q-learning on a replay batch, on preallocated buffers.
-
-    Loss: mean over the batch of Huber(Q(s, a) - y), y = r + gamma * max_a' Q_target(s', a')
-    (no bootstrap after a terminal state). The backward pass is written out layer by layer
-    (dL/dW = delta^T h, dL/dh = delta W, ReLU passes delta where its unit was active).
-    """
+class ReferenceUpdate:
+    """One gradient step of deep Q-learning on a replay batch, written with autograd:
+    y = r + gamma * bootstrap * max_a' Q_target(s', a') (no gradient through the target),
+    loss = mean Huber(Q(s, a) - y), the gradient clipped to global L2 norm ``max_grad_norm``,
+    then ``torch.optim.Adam``. ``algorithm.kernels=reference`` learns with it; the fast kernels
+    (``dqn_kernels.FastUpdate``) are tested equal to it."""
 
     def __init__(self, network: QNetwork, target: QNetwork, config: DQNConfig):
-        self.config = config
-        self.online = network.layers(network.flat.detach())
-        self.target = target.layers(target.flat.detach())
-        self.grad_flat = torch.zeros_like(network.flat.detach())
-        self.grads = network.layers(self.grad_flat)
-        self.adam_mean = torch.zeros_like(self.grad_flat)
-        self.adam_sq_mean = torch.zeros_like(self.grad_flat)
-        self.adam_steps = 0
-        self._params_np = network.flat.detach().numpy()
-        self._adam_np = (self.grad_flat.numpy(), self.adam_mean.numpy(), self.adam_sq_mean.numpy())
-        B, H, A = config.batch_size, config.hidden_size, network.shapes[-1][0]
-        # Activations of each hidden layer; the last one is written straight into its slot of
-        # the head's input [h, one-hot], so the concatenation costs nothing.
-        def activations():
-            acts = [torch.zeros(B, H) for _ in range(config.num_hidden_layers - 1)]
-            head_input = torch.zeros(B, H + NUM_BINARY)
-            return acts + [head_input[:, :H]], head_input
-        self.acts, self.head_input = activations()
-        self.target_acts, self.target_head_input = activations()
-        self.q = torch.zeros(B, A)
-        self.target_q = torch.zeros(B, A)
-        self.delta_q = torch.zeros(B, A)
-        self.deltas = [torch.zeros(B, H) for _ in range(config.num_hidden_layers)]
+        self.config, self.network, self.target = config, network, target
+        self.optimizer = torch.optim.Adam(
+            [network.flat], lr=config.learning_rate, betas=(config.adam_beta1, config.adam_beta2),
+            eps=config.adam_epsilon, foreach=False)
         self.grad_norm = 0.0  # of the last update's gradient, before clipping
-        # numpy views of the same memory, for the numba kernels.
-        self._np = {
-            "q": self.q.numpy(), "target_q": self.target_q.numpy(), "delta_q": self.delta_q.numpy(),
-            "acts": [a.numpy() for a in self.acts], "deltas": [d.numpy() for d in self.deltas],
-            "head_gb": self.grads[-1][1].numpy(),
-            "hidden_gb": [gb.numpy() for _, gb in self.grads[:-1]],
-        }
+        self.load_optimizer_state(torch.zeros_like(network.flat.detach()),
+                                  torch.zeros_like(network.flat.detach()), 0)
 
-    def _forward(self, layers, observations, acts, head_input, q) -> None:
-        *hidden, (head_w, head_b) = layers
-        h = observations[:, :NUM_DISTANCES]
-        for (w, b), out in zip(hidden, acts):
-            torch.addmm(b, h, w.t(), out=out).relu_()
-            h = out
-        head_input[:, h.shape[1]:].copy_(observations[:, NUM_DISTANCES:])
-        torch.addmm(head_b, head_input, head_w.t(), out=q)
-
-    def __call__(self, batch: dict[str, torch.Tensor]) -> float:
+    def __call__(self, batch: dict) -> float:
         """One update; returns the batch's mean Huber loss (before the step)."""
-        # Adam's moments of rarely-active weights decay into subnormal floats, which cost the
-        # CPU ~10x per operation; flush them to zero during the update (this thread only, and
-        # restored after, so nothing else in the process sees the switch).
-        torch.set_flush_denormal(True)
-        try:
-            return self._update(batch)
-        finally:
-            torch.set_flush_denormal(False)
-
-    def _update(self, batch: dict[str, torch.Tensor]) -> float:
         cfg = self.config
-        obs = batch["observations"]
+        with torch.no_grad():
+            best_next = self.target(batch["next_observations"]).max(dim=1).values
+            y = batch["rewards"] + cfg.gamma * batch["bootstrap"] * best_next
+        q = self.network(batch["observations"]).gather(1, batch["actions"].long()[:, None])
+        loss = F.huber_loss(q.squeeze(1), y, delta=cfg.huber_delta)
+        self.optimizer.zero_grad()
+        loss.backward()
+        max_norm = math.inf if cfg.max_grad_norm is None else cfg.max_grad_norm
+        self.grad_norm = float(torch.nn.utils.clip_grad_norm_([self.network.flat], max_norm))
+        self.optimizer.step()
+        return loss.item()
 
-        # TD target from the target network (no gradient flows through it), then the online
-        # forward pass and dLoss/dQ.
-        self._forward(self.target, batch["next_observations"], self.target_acts,
-                      self.target_head_input, self.target_q)
-        self._forward(self.online, obs, self.acts, self.head_input, self.q)
-        *hidden_w, (head_w, _) = self.online
-        *hidden_g, (head_gw, head_gb) = self.grads
-        ws = self._np
-        loss = _huber_td_gradient(
-            ws["q"], ws["target_q"], batch["actions"].numpy(), batch["rewards"].numpy(),
-            batch["bootstrap"].numpy(), cfg.gamma, cfg.huber_delta, ws["delta_q"], ws["head_gb"])
+    # Adam's state, named as in the checkpoints (shared with the fast kernels).
+    @property
+    def adam_mean(self) -> torch.Tensor:
+        return self.optimizer.state[self.network.flat]["exp_avg"]
 
-        # Backward through the head, then each hidden layer (last to first).
-        torch.mm(self.delta_q.t(), self.head_input, out=head_gw)
-        delta = torch.mm(self.delta_q, head_w[:, :cfg.hidden_size], out=self.deltas[-1])
-        inputs = [obs[:, :NUM_DISTANCES]] + self.acts[:-1]
-        for layer in reversed(range(len(hidden_w))):
-            _relu_backward(ws["deltas"][layer], ws["acts"][layer], ws["hidden_gb"][layer])
-            torch.mm(delta.t(), inputs[layer], out=hidden_g[layer][0])
-            if layer > 0:  # the distances need no gradient
-                delta = torch.mm(delta, hidden_w[layer][0], out=self.deltas[layer - 1])
+    @property
+    def adam_sq_mean(self) -> torch.Tensor:
+        return self.optimizer.state[self.network.flat]["exp_avg_sq"]
 
-        self.adam_steps += 1
-        t = self.adam_steps
-        self.grad_norm = _adam_step(
-            self._params_np, *self._adam_np,
-            np.float32(cfg.learning_rate / (1.0 - cfg.adam_beta1 ** t)),
-            np.float32(cfg.adam_beta1), np.float32(cfg.adam_beta2), np.float32(cfg.adam_epsilon),
-            np.float32(1.0 / (1.0 - cfg.adam_beta2 ** t)),
-            0.0 if cfg.max_grad_norm is None else float(cfg.max_grad_norm),
-        )
-        return loss
+    @property
+    def adam_steps(self) -> int:
+        return int(self.optimizer.state[self.network.flat]["step"])
 
-    def flops(self) -> int:
-        """FLOPs of one update: the online forward, its backward (~2x), the target forward."""
-        cfg = self.config
-        return 4 * cfg.batch_size * forward_flops(cfg.hidden_size, cfg.num_hidden_layers,
-                                                  self.q.shape[1])
+    def load_optimizer_state(self, mean: torch.Tensor, sq_mean: torch.Tensor, steps: int) -> None:
+        self.optimizer.state[self.network.flat] = {
+            "step": torch.tensor(float(steps)), "exp_avg": mean.clone(), "exp_avg_sq": sq_mean.clone()}
 
 
-# --------------------------------------------------------------------------------------------
-# Acting: the greedy action from numpy views of the live online weights
-# --------------------------------------------------------------------------------------------
-@numba.njit(fastmath=True, error_model="numpy", cache=True)
-def _q_values(flat, shapes, observation, hidden, q):
-    """Q(s, .) of one observation into ``q``, reading the flat weight vector laid out as in
-    ``QNetwork`` (``shapes``: (out, in) per layer); ``hidden``: (2, hidden_size) scratch.
-    Returns argmax_a Q(s, a) (the first on ties)."""
-    num_hidden = shapes.shape[0] - 1
-    src, dst = hidden[0], hidden[1]
-    for i in range(shapes[0, 1]):
-        src[i] = observation[i]  # the distances
-    start = 0
-    for layer in range(num_hidden):
-        rows, cols = shapes[layer, 0], shapes[layer, 1]
-        w = flat[start:start + rows * cols].reshape((rows, cols))
-        b = flat[start + rows * cols:start + rows * cols + rows]
-        start += rows * cols + rows
-        for r in range(rows):
-            acc = b[r]
-            for c in range(cols):
-                acc += w[r, c] * src[c]
-            dst[r] = max(acc, 0.0)
-        src, dst = dst, src
-    rows, cols = shapes[num_hidden, 0], shapes[num_hidden, 1]
-    width = shapes[num_hidden - 1, 0]
-    w = flat[start:start + rows * cols].reshape((rows, cols))
-    b = flat[start + rows * cols:start + rows * cols + rows]
-    best = 0
-    for r in range(rows):
-        acc = b[r]
-        for c in range(width):
-            acc += w[r, c] * src[c]
-        for c in range(width, cols):  # the one-hot of the active picking location
-            acc += w[r, c] * observation[shapes[0, 1] + c - width]
-        q[r] = acc
-        if acc > q[best]:
-            best = r
-    return best
-
-
-class GreedyPolicy:
-    """argmax_a Q(s, a) for one observation. Reads the online weights through a numpy view of
-    the torch storage, so it always sees the latest update without copying; a compiled loop,
-    because a torch (or numpy) forward of a single observation is mostly call overhead."""
+class ReferenceGreedyPolicy:
+    """argmax_a Q(s, a) of one observation by the network's autograd-free torch forward."""
 
     def __init__(self, network: QNetwork):
-        self.flat = network.flat.detach().numpy()
-        self.shapes = np.array(network.shapes, dtype=np.int64)
-        self.hidden = np.zeros((2, network.shapes[0][0]), np.float32)
-        self.q = np.zeros(network.shapes[-1][0], np.float32)
+        self.network = network
 
     def q_values(self, observation: np.ndarray) -> np.ndarray:
-        _q_values(self.flat, self.shapes, observation, self.hidden, self.q)
-        return self.q
+        with torch.no_grad():
+            return self.network(torch.as_tensor(observation, dtype=torch.float32)[None])[0].numpy()
 
     def __call__(self, observation: np.ndarray) -> int:
-        return _q_values(self.flat, self.shapes, observation, self.hidden, self.q)
+        return int(np.argmax(self.q_values(observation)))  # the first on ties, as the kernel
 
 
 # --------------------------------------------------------------------------------------------
@@ -496,8 +339,14 @@ class DQNLearner:
         self.network = QNetwork(config.hidden_size, config.num_hidden_layers, num_actions, init)
         self.target_network = copy.deepcopy(self.network)
         self.buffer = ReplayBuffer(config.buffer_size, config.batch_size)
-        self.update = TDUpdate(self.network, self.target_network, config)
-        self.greedy = GreedyPolicy(self.network)
+        if config.kernels == "fast":
+            from .dqn_kernels import FastGreedyPolicy, FastUpdate  # numba compiles on import
+
+            self.update = FastUpdate(self.network, self.target_network, config)
+            self.greedy = FastGreedyPolicy(self.network)
+        else:
+            self.update = ReferenceUpdate(self.network, self.target_network, config)
+            self.greedy = ReferenceGreedyPolicy(self.network)
         self._updates_start = max(config.learning_starts, config.batch_size)
         self.steps = self.target_syncs = self.episodes = 0
         self.last_loss = 0.0
@@ -589,9 +438,8 @@ class DQNLearner:
         with torch.no_grad():
             self.network.flat.copy_(state["network"])
             self.target_network.flat.copy_(state["target_network"])
-        self.update.adam_mean.copy_(state["adam_mean"])
-        self.update.adam_sq_mean.copy_(state["adam_sq_mean"])
-        self.update.adam_steps = int(state["adam_steps"])
+        self.update.load_optimizer_state(state["adam_mean"], state["adam_sq_mean"],
+                                         int(state["adam_steps"]))
         restore_rng_state(self.rng, state["rng"])
         self.steps = int(state["steps"])
         self.last_loss, self.update.grad_norm = float(state["last_loss"]), float(state["grad_norm"])
