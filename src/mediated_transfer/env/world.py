@@ -176,9 +176,9 @@ class World:
         self._read_poses()
 
     def _simulate(self) -> None:
-        space, dt = self._space_cp, self._dt
+        step, space, dt = _space_step, self._space_cp, self._dt
         for _ in range(self._substeps):
-            _space_step(space, dt)
+            step(space, dt)
         self.physics_steps += self._substeps
 
     def _read_poses(self) -> None:
