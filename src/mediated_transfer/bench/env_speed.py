@@ -5,9 +5,12 @@ environments, timing only ``reset`` and ``step``:
 
 * learner trajectories, the aim's workload: linear Q(lambda) + RBF with its tuned values learns
   under regular transfer (N_source = 50, the run loop of run.py without evaluations) for
-  ``LEARN_STEPS`` steps, and episodes spread evenly over that learning are replayed. A learner
-  picks, pushes and drags objects, the physics a run pays for; random actions rarely touch one.
+  ``LEARN_STEPS`` steps. A learner picks, pushes and drags objects, the physics a run pays
+  for; random actions rarely touch one.
 * uniformly random actions on target tasks (the second line).
+
+Every replay runs the whole recorded sequence in order (an episode's contacts can depend on
+the episodes before it) and times about ``steps`` steps of episodes spread evenly over it.
 
 The figure is the overhead: (env step time - time inside ``cpSpaceStep``) / time inside
 ``cpSpaceStep``; aim <= 1, i.e. a step costs at most twice the Chipmunk physics it drives.
@@ -38,7 +41,7 @@ LEARN_STEPS = 100_000
 N_SOURCE = 50
 LEARNER_OVERRIDES = ("algorithm=linear_q", "representation=rbf", "strategy=regular",
                      f"n_source={N_SOURCE}")
-WARMUP_EPISODES = 5
+WARMUP_EPISODES = 1  # untimed: first calls fill caches
 
 
 @dataclass(frozen=True)
@@ -52,8 +55,8 @@ class Episode:
 
 
 def _start(env: MediatedInteractionEnv, noise_seed: int, task: Task):
-    # A generator per episode, not one per run as in run.py, and the task given, not drawn
-    # from it: any episode replays on its own.
+    # A noise generator per episode (run.py has one per run) and the task given, not drawn
+    # from it: a replay needs only the episode's record.
     env.np_random = np.random.default_rng(noise_seed)
     return env.reset(options={"task": task})[0]
 
@@ -190,12 +193,14 @@ def measure(episodes: list[Episode], steps: int, rounds: int) -> dict:
     bounds = np.linspace(0, len(episodes), rounds + 1).astype(int)
     speeds, overheads, steps_done, substeps = [], [], 0, 0
     for k in range(rounds):
-        part, flags = slice(bounds[k], bounds[k + 1]), timed[bounds[k] : bounds[k + 1]]
+        part, flags = episodes[bounds[k] : bounds[k + 1]], timed[bounds[k] : bounds[k + 1]]
         physics[0] = 0.0
         if k % 2:  # alternate which goes first
-            (env_time, n, calls), _ = _play(plain, episodes[part], flags), _play(twin, episodes[part], flags, physics)
+            env_time, n, calls = _play(plain, part, flags)
+            _play(twin, part, flags, physics)
         else:
-            _, (env_time, n, calls) = _play(twin, episodes[part], flags, physics), _play(plain, episodes[part], flags)
+            _play(twin, part, flags, physics)
+            env_time, n, calls = _play(plain, part, flags)
         if n:
             speeds.append(n / env_time)
             overheads.append((env_time - physics[0]) / physics[0])
@@ -215,7 +220,7 @@ def run(steps: int = 20_000, seed: int = 0, rounds: int = 10,
     if steps < 100 * rounds:
         raise ValueError(f"steps must be >= {100 * rounds} (an episode per round), got {steps}")
     learner = measure(learner_episodes(max(learn_steps, steps), seed), steps, rounds)
-    rand = measure(random_episodes(steps, seed), steps, rounds)
+    rand = measure(random_episodes(steps + 100, seed), steps, rounds)  # + the warm-up
     result = {**learner, "us_per_step": 1e6 / learner["steps_per_second"],
               "learn_steps": learn_steps, **{f"random_{k}": v for k, v in rand.items()}}
     print(f"environment, medians of {rounds} rounds; overhead = (env step - time in cpSpaceStep) "
