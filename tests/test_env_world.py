@@ -90,3 +90,31 @@ def test_the_wall_keeps_its_inner_face_at_world_radius():
         a, b = np.array(segment.a), np.array(segment.b)
         midpoint_radius = np.linalg.norm((a + b) / 2)
         assert midpoint_radius - segment.radius == pytest.approx(CONFIG.world_radius)
+
+
+class _PublicStepWorld(World):
+    """The world stepped through pymunk's public ``Space.step``, as before the direct calls."""
+
+    def _simulate(self) -> None:
+        for _ in range(self._substeps):
+            self.space.step(self._dt)
+        self.physics_steps += self._substeps
+
+
+def test_direct_chipmunk_steps_match_space_step_exactly():
+    # Pushes, hook drags and coasting: every pose bit for bit as with pymunk's own step.
+    worlds = [World(CONFIG), _PublicStepWorld(CONFIG)]
+    poses = [[], []]
+    for world, trace in zip(worlds, poses):
+        for task in (Task((1.5, 0.0), (0.0, -3.0), math.pi / 2), Task((6.0, 2.0), (1.0, 0.0), 0.2)):
+            world.place(task)
+            for _ in range(4):
+                world.translate_tool(1.0, 0.0)
+                world.rotate_tool(M3, math.pi / 4)
+                world.translate_tool(-0.5, 0.5)
+                world.idle()
+                trace.append((world.target_x, world.target_y, world.tool_x, world.tool_y,
+                              world.tool_angle, world.at_rest))
+    assert poses[0] == poses[1]
+    assert poses[0][0][0] != 1.5  # the target was pushed
+    assert worlds[0].physics_steps == worlds[1].physics_steps

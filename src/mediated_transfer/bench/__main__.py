@@ -1,7 +1,7 @@
 """`make bench`: speed ratios of the environment and the learners, each measured in one run.
 
 Ratios, not absolute times, are the targets (they survive a slower or busier machine):
-  env:    environment step / the bare pymunk space.step calls it makes   (aim <= 2)
+  env:    Python per env step / its time inside Chipmunk's cpSpaceStep    (aim <= 1)
   linear: linear learner time per step / environment step                (aim <= 1)
   dqn:    our DQN learning steps/s / Stable-Baselines3 DQN steps/s       (aim >= 5)
 """
