@@ -303,3 +303,21 @@ def test_a_baseline_and_a_variant_sharing_a_sweep_folder_keep_their_own_plans(ro
     assert len(list(sweep_dir.glob(f"{PLAN_PREFIX}*.json"))) == 2
     assert sweep_progress(sweep_dir, "none_0/seed=0")[:2] == (1, 1)
     assert sweep_progress(sweep_dir, "none_0/seed=1/algorithm.lambda_=0.5")[:2] == (2, 2)
+
+
+def test_progress_does_not_count_a_stale_result_being_recomputed(tmp_path):
+    import os
+    import time
+
+    from mediated_transfer.progress import sweep_progress
+    from mediated_transfer.sweep import write_plan
+
+    runs = ["none_0/seed=0", "none_0/seed=1", "none_0/seed=2"]
+    for run in runs[:2]:  # results from before the launch; seed=1's is stale
+        (tmp_path / run).mkdir(parents=True)
+        (tmp_path / run / "result.json").write_text("{}")
+        os.utime(tmp_path / run / "result.json", (time.time() - 60, time.time() - 60))
+    write_plan(tmp_path, runs, recompute=["none_0/seed=1"])
+    assert sweep_progress(tmp_path, runs[0])[:2] == (1, 3)
+    (tmp_path / runs[1] / "result.json").write_text("{}")  # recomputed
+    assert sweep_progress(tmp_path, runs[0])[:2] == (2, 3)

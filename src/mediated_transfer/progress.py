@@ -65,9 +65,13 @@ def sweep_progress(sweep_dir: Path, run: str) -> tuple[int, int, float | None] |
         return None
     plan = max(plans, key=lambda p: p["started"])
     # Only this launch's runs: other sweeps (a variant) may share the folder.
-    files = [sweep_dir / r / "result.json" for r in plan["runs"]]
-    results = [f.stat().st_mtime for f in files if f.is_file()]
-    finished = min(len(results), plan["total"])
+    files = {r: sweep_dir / r / "result.json" for r in plan["runs"]}
+    results = {r: f.stat().st_mtime for r, f in files.items() if f.is_file()}
+    # A stale result the launch recomputes is finished only once rewritten.
+    recompute = set(plan.get("recompute", []))
+    finished = min(sum(r not in recompute or t >= plan["started"] for r, t in results.items()),
+                   plan["total"])
+    results = list(results.values())
     # Only runs computed since this launch tell the current speed (earlier ones were skipped).
     computed = sum(t >= plan["started"] for t in results)
     elapsed = time.time() - plan["started"]

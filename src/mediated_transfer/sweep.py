@@ -59,6 +59,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
     configs = {job: compose_config(list(job), hydra=True) for job in distinct}
     specs = {job: run_spec(cfg) for job, cfg in configs.items()}
     plans: dict[Path, list[str]] = {}
+    recompute: dict[Path, list[str]] = {}
     for job in jobs:
         cfg = _with_seed(configs[_without_seed(job)], job)
         sweep_dir, run = Path(cfg.hydra.sweep.dir), str(cfg.hydra.sweep.subdir).rstrip("/")
@@ -66,24 +67,29 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
         # as a traceback halfway through it.
         folder = sweep_dir / run
         if RunResult.exists(folder):
-            check_same_run(RunResult.read(folder), replace(specs[_without_seed(job)], seed=int(cfg.seed)), folder)
+            found = RunResult.read(folder)
+            check_same_run(found, replace(specs[_without_seed(job)], seed=int(cfg.seed)), folder)
+            if cfg.rerun_stale and found.stale():
+                recompute.setdefault(sweep_dir, []).append(run)
         plans.setdefault(sweep_dir, []).append(run)
     _prepare_tracking(base)
     _warm_source_task_cache(list(specs.values()))
     for sweep_dir, runs in plans.items():
-        write_plan(sweep_dir, runs)
+        write_plan(sweep_dir, runs, recompute.get(sweep_dir, []))
         log.info("sweep %s: %d runs in %s", base.name, len(runs), sweep_dir)
     return jobs
 
 
-def write_plan(sweep_dir: Path, runs: list[str]) -> Path:
-    """The plan of one launch into one sweep folder: its runs' folders and when it started.
-    Named after its runs, so sweeps that share the folder (a baseline and a variant) keep
-    their own plans."""
+def write_plan(sweep_dir: Path, runs: list[str], recompute: Sequence[str] = ()) -> Path:
+    """The plan of one launch into one sweep folder: its runs' folders, those of them whose
+    stale results it recomputes (their old result files do not count as finished), and when
+    it started. Named after its runs, so sweeps that share the folder (a baseline and a
+    variant) keep their own plans."""
     sweep_dir.mkdir(parents=True, exist_ok=True)
     name = hashlib.sha256("\n".join(runs).encode()).hexdigest()[:12]
     path = sweep_dir / f"{PLAN_PREFIX}{name}.json"
-    atomic_write_text(path, json.dumps({"total": len(runs), "started": time.time(), "runs": runs}) + "\n")
+    plan = {"total": len(runs), "started": time.time(), "runs": runs, "recompute": list(recompute)}
+    atomic_write_text(path, json.dumps(plan) + "\n")
     return path
 
 
