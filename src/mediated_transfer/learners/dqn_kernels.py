@@ -48,17 +48,18 @@ def _unpack(rows, distances, binary, next_distances, next_binary, observation_si
 
 
 @numba.njit(fastmath=True, error_model="numpy", cache=True)
-def _loss_backward(q, target_q, h, binary, head_w, actions, rewards, bootstrap, gamma, huber_delta,
+def _loss_backward(q, target_q, head_input, head_w, actions, rewards, bootstrap, gamma, huber_delta,
                    delta_h, head_gw, head_gb, last_gb):
     """The TD loss and the backward pass through the head, for one batch.
 
     y = r + gamma * bootstrap * max_a' Q_target(s', a'); the loss is the mean Huber loss of
     Q(s, a) - y, whose derivative is the TD error clipped to [-delta, delta]. Only Q(s, a) of
-    the taken action enters, so only that row of the head receives gradient. Writes the head's
-    weight and bias gradients, dLoss/dh of the last hidden layer ``h`` passed back through its
-    ReLU (``delta_h``) and that layer's bias gradient; returns the loss."""
-    batch, width = h.shape
-    num_actions, num_binary = q.shape[1], binary.shape[1]
+    the taken action enters, so only that row of the head receives gradient. ``head_input`` is
+    [h, one-hot], h the last hidden layer (all arrays C-contiguous, so the loops vectorise).
+    Writes the head's weight and bias gradients, dLoss/dh passed back through h's ReLU
+    (``delta_h``) and h's bias gradient; returns the loss."""
+    batch, width = delta_h.shape
+    num_actions, columns = q.shape[1], head_input.shape[1]
     head_gw[:] = 0.0
     head_gb[:] = 0.0
     last_gb[:] = 0.0
@@ -75,13 +76,12 @@ def _loss_backward(q, target_q, h, binary, head_w, actions, rewards, bootstrap, 
             loss += huber_delta * (abs(td) - 0.5 * huber_delta)
         g = min(max(td, -huber_delta), huber_delta) / batch
         head_gb[a] += g
+        for j in range(columns):
+            head_gw[a, j] += g * head_input[i, j]
         for j in range(width):
-            head_gw[a, j] += g * h[i, j]
-            d = g * head_w[a, j] if h[i, j] > 0.0 else 0.0  # through the ReLU
+            d = g * head_w[a, j] if head_input[i, j] > 0.0 else 0.0  # through the ReLU
             delta_h[i, j] = d
             last_gb[j] += d
-        for k in range(num_binary):
-            head_gw[a, width + k] += g * binary[i, k]
     return loss / batch
 
 
@@ -206,8 +206,7 @@ class FastUpdate:
 
         # TD target, loss and the backward pass through the head in one kernel.
         loss = _loss_backward(
-            self.q.numpy(), self.target_q.numpy(), self._acts_np[-1], self._unpacked[1],
-            head_w.numpy(), batch["actions"].numpy(), batch["rewards"].numpy(),
+            self.q.numpy(), self.target_q.numpy(), self.head_input.numpy(), head_w.numpy(), batch["actions"].numpy(), batch["rewards"].numpy(),
             batch["bootstrap"].numpy(), cfg.gamma, cfg.huber_delta, self._deltas_np[-1],
             *(g.numpy() for g in self.grads[-1]), self._hidden_gb[-1])
 
