@@ -78,6 +78,29 @@ def project_run(p: dict) -> float:
             + p["paper_eval_points"] * p["eval_s_per_point"] + JOB_OVERHEAD_S)
 
 
+def project(probes: list[dict], rows: dict[str, tuple[list[str], int]], cores: int) -> dict:
+    """The projected sweep from the probes of every row: per table its runs, CPU hours, wall
+    hours on ``cores`` and where the time goes; the total wall hours."""
+    result: dict = {"cores": cores, "tables": {}, "probes": probes}
+    total_s = 0.0
+    for table, (_, seeds) in rows.items():
+        mine = [p for p in probes if p["experiment"] == table]
+        cpu_s = sum(seeds * project_run(p) for p in mine)
+        learn_s = sum(seeds * p["paper_budget"] / p["steps_per_s"] for p in mine)
+        eval_s = sum(seeds * p["paper_eval_points"] * p["eval_s_per_point"] for p in mine)
+        slowest = max(mine, key=project_run)
+        total_s += cpu_s / cores
+        result["tables"][table] = {
+            "runs": seeds * len(mine), "cpu_hours": cpu_s / 3600, "wall_hours": cpu_s / cores / 3600,
+            "run_s_median": statistics.median(project_run(p) for p in mine),
+            "slowest_row": slowest["cell"], "slowest_run_s": project_run(slowest),
+            "steps_per_s_median": statistics.median(p["steps_per_s"] for p in mine),
+            "learning_share": learn_s / cpu_s, "evaluation_share": eval_s / cpu_s,
+        }
+    result["total_wall_hours"] = total_s / 3600
+    return result
+
+
 def run(steps: int | None = None, tables: tuple[str, ...] = TABLES, cores: int | None = None,
         verbose: bool = True) -> dict:
     """Probe every row of ``tables`` on ``cores`` processes and project the paper-scale sweep."""
@@ -88,36 +111,16 @@ def run(steps: int | None = None, tables: tuple[str, ...] = TABLES, cores: int |
         print(f"probing {len(jobs)} rows ({', '.join(tables)}) on {cores} core(s)...", flush=True)
     with ProcessPoolExecutor(cores, mp_context=get_context("spawn")) as pool:
         probes = list(pool.map(probe, *zip(*jobs), [steps] * len(jobs)))
-    result: dict = {"cores": cores, "tables": {}, "probes": probes}
-    total = 0.0
-    for t in tables:
-        mine = [p for p in probes if p["experiment"] == t]
-        seeds = rows[t][1]
-        cpu_s = sum(seeds * project_run(p) for p in mine)
-        slowest = max(mine, key=project_run)
-        wall_s = cpu_s / cores
-        total += wall_s
-        learn_s = sum(seeds * p["paper_budget"] / p["steps_per_s"] for p in mine)
-        eval_s = sum(seeds * p["paper_eval_points"] * p["eval_s_per_point"] for p in mine)
-        result["tables"][t] = {
-            "runs": seeds * len(mine), "cpu_hours": cpu_s / 3600, "wall_hours": wall_s / 3600,
-            "run_s_median": statistics.median(project_run(p) for p in mine),
-            "slowest_row": slowest["cell"], "slowest_run_s": project_run(slowest),
-            "steps_per_s_median": statistics.median(p["steps_per_s"] for p in mine),
-            "learning_share": learn_s / cpu_s, "evaluation_share": eval_s / cpu_s,
-        }
-        if verbose:
-            r = result["tables"][t]
+    result = project(probes, rows, cores)
+    if verbose:
+        for t, r in result["tables"].items():
             print(f"  {t}: {r['runs']} runs, a run ~{r['run_s_median']:.0f} s (slowest row "
                   f"{r['slowest_row']}: {r['slowest_run_s']:.0f} s; "
                   f"{r['steps_per_s_median']:,.0f} learning steps/s) -> {r['cpu_hours']:.2f} CPU-h, "
                   f"{r['wall_hours']:.2f} h on {cores} cores; learning {r['learning_share']:.0%}, "
                   f"evaluation {r['evaluation_share']:.0%} of it", flush=True)
-    total /= 3600
-    result["total_wall_hours"] = total
-    if verbose:
-        print(f"  make reproduce-tables SCALE=paper: ~{total:.2f} h on {cores} cores (aim <= 3 h "
-              f"on 2 cores)", flush=True)
+        print(f"  make reproduce-tables SCALE=paper: ~{result['total_wall_hours']:.2f} h on {cores} "
+              f"cores (aim <= 3 h on 2 cores)", flush=True)
     return result
 
 

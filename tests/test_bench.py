@@ -1,0 +1,40 @@
+"""`make bench`'s projection of the paper-scale sweep: what it counts and how it adds up."""
+
+import pytest
+
+from mediated_transfer.bench import projection
+
+
+def test_each_table_has_its_eleven_rows_and_twenty_seeds():
+    for table in projection.TABLES:
+        cells, seeds = projection.table_rows(table)
+        assert seeds == 20
+        assert cells[0] == "none_0" and len(cells) == 11 and "scaffolded_5000" in cells
+
+
+def fake_probe(table, cell, steps_per_s, eval_s=0.5, setup_s=0.2):
+    return {"experiment": table, "cell": cell, "steps_per_s": steps_per_s, "eval_s_per_point": eval_s,
+            "setup_s": setup_s, "paper_budget": 500_000, "paper_eval_points": 25}
+
+
+def test_projection_adds_every_run_of_every_row_and_divides_by_the_cores():
+    probes = [fake_probe("a", "none_0", 50_000), fake_probe("a", "regular_50", 25_000),
+              fake_probe("b", "none_0", 5_000)]
+    rows = {"a": (["none_0", "regular_50"], 20), "b": (["none_0"], 10)}
+    result = projection.project(probes, rows, cores=2)
+    run_a = [0.2 + 10 + 12.5 + projection.JOB_OVERHEAD_S, 0.2 + 20 + 12.5 + projection.JOB_OVERHEAD_S]
+    run_b = 0.2 + 100 + 12.5 + projection.JOB_OVERHEAD_S
+    a, b = result["tables"]["a"], result["tables"]["b"]
+    assert a["runs"] == 40 and b["runs"] == 10
+    assert a["cpu_hours"] == pytest.approx(20 * sum(run_a) / 3600)
+    assert a["wall_hours"] == pytest.approx(a["cpu_hours"] / 2)
+    assert a["slowest_row"] == "regular_50" and a["slowest_run_s"] == pytest.approx(run_a[1])
+    assert a["learning_share"] == pytest.approx(20 * 30 / (20 * sum(run_a)))
+    assert result["total_wall_hours"] == pytest.approx((20 * sum(run_a) + 10 * run_b) / 2 / 3600)
+
+
+def test_a_probe_is_a_short_real_run_of_the_tables_configuration():
+    probe = projection.probe("table2_rbf", "none_0", 200)
+    assert probe["algorithm"] == "linear_q" and probe["probe_steps"] == 200
+    assert (probe["paper_budget"], probe["paper_eval_points"]) == (500_000, 25)
+    assert probe["steps_per_s"] > 0 and probe["eval_s_per_point"] > 0
