@@ -235,6 +235,8 @@ def test_any_non_negative_n_source_composes():
     (["env.goal_radius=20"], "goal_radius"),
     (["algorithm.gamma=1.5"], r"algorithm.gamma must lie in \[0, 1\), got 1.5"),
     (["seed=-1"], "seed must be >= 0"),
+    (["algorithm=dqn", "representation=network", "algorithm.kernels=turbo"],
+     r"^algorithm.kernels must be fast or reference, got 'turbo'$"),
 ])
 def test_invalid_combination_fails_before_any_work(hydra_context, overrides, message):
     with pytest.raises(ConfigError, match=message):

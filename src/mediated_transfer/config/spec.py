@@ -50,7 +50,9 @@ def run_spec(cfg: Mapping[str, Any]) -> "RunSpec":
     try:
         return spec_from_dict(spec_values(cfg)).validate()
     except (ValueError, TypeError, KeyError) as error:
-        raise ConfigError(str(error).strip("'\"")) from None
+        # str() of a KeyError is its quoted key; other messages may end in a quoted value.
+        message = error.args[0] if isinstance(error, KeyError) and error.args else error
+        raise ConfigError(str(message)) from None
 
 
 def comparable(spec: "RunSpec") -> dict[str, Any]:
