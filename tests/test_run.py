@@ -159,3 +159,15 @@ def test_bench_command_accepts_no_parts_and_refuses_unknown_ones(monkeypatch):
     assert [name for name, _ in ran] == list(bench.PARTS.values())
     with pytest.raises(SystemExit):
         bench.main(["gpu"])
+
+
+def test_the_callbacks_see_each_evaluation_point_and_the_trained_learner():
+    spec = RunSpec(representation="fsr", seed=2, **TINY)
+    seen, learners = [], []
+    result = execute_run(spec, on_evaluation=lambda *point: seen.append(point),
+                         on_finish=learners.append)
+    assert seen == list(zip(result.steps, result.mean_reward, result.success_rate))
+    [learner] = learners
+    assert learner.stats == result.learner_stats
+    # Watching does not change the run.
+    assert execute_run(spec).mean_reward == result.mean_reward

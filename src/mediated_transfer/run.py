@@ -121,10 +121,17 @@ def evaluate(learner: Learner, env: MediatedInteractionEnv, tasks, seed: int) ->
 
 
 ProgressFn = Callable[[int, int], None]
+EvaluationFn = Callable[[int, float, float], None]
+"""Called at each evaluation point with (learning step, <R>, success rate)."""
+FinishFn = Callable[[Learner], None]
+"""Called with the trained learner at the end of the run (e.g. to save it)."""
 
 
-def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_every: int = 0) -> RunResult:
-    """Run one learning run and return its result (the caller writes it)."""
+def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_every: int = 0,
+                on_evaluation: EvaluationFn | None = None,
+                on_finish: FinishFn | None = None) -> RunResult:
+    """Run one learning run and return its result (the caller writes it). The callbacks see
+    the run as it goes; they cannot change what it computes."""
     spec.validate()
     world = spec.world
     learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
@@ -173,6 +180,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
                 steps.append(step)
                 rewards.append(r)
                 success.append(p)
+                if on_evaluation is not None:
+                    on_evaluation(step, r, p)
                 mark = time.perf_counter()
             if progress is not None and step % progress_every == 0:
                 progress(step, spec.budget)
@@ -185,6 +194,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
                 source_phase_end = step
     learn_time += time.perf_counter() - mark
     wall = time.perf_counter() - started
+    if on_finish is not None:
+        on_finish(learner)
 
     rewards_arr = np.asarray(rewards)
     return RunResult(
