@@ -321,3 +321,61 @@ def test_progress_does_not_count_a_stale_result_being_recomputed(tmp_path):
     assert sweep_progress(tmp_path, runs[0])[:2] == (1, 3)
     (tmp_path / runs[1] / "result.json").write_text("{}")  # recomputed
     assert sweep_progress(tmp_path, runs[0])[:2] == (2, 3)
+
+
+@pytest.mark.parametrize("error, status", [(KeyboardInterrupt, "KILLED"), (RuntimeError, "FAILED")])
+def test_a_run_stopped_while_computing_ends_its_mlflow_run_and_writes_nothing(root, source_cache, monkeypatch,
+                                                                            error, status):
+    from mediated_transfer import run as run_module
+
+    real = run_module.execute_run
+
+    def stopped_after_one_point(spec, **callbacks):
+        def evaluated(*point):
+            callbacks["on_evaluation"](*point)
+            raise error("stopped")
+
+        return real(spec, **{**callbacks, "on_evaluation": evaluated})
+
+    monkeypatch.setattr(run_module, "execute_run", stopped_after_one_point)
+    with pytest.raises((error, SystemExit)):
+        _run_cli("-m", "experiment=table2_rbf", "cell=none_0", "seed=0", "hydra/launcher=basic",
+                 *_common(root, source_cache))
+    [run] = tracking.find_runs(_settings(root), "table2_rbf")
+    assert run.info.status == status
+    assert len(_settings(root).client().get_metric_history(run.info.run_id, "mean_reward")) == 1
+    assert not _results(root / "multirun" / "table2_rbf" / "smoke")
+
+
+def test_a_single_run_prints_its_current_reward(root, source_cache, capsys):
+    _run_cli("cell=none_0", "seed=0", "tracking=none", *_common(root, source_cache))
+    lines = [line for line in capsys.readouterr().out.splitlines() if "steps/s, <R>" in line]
+    assert lines and lines[-1].endswith("(0% solved) at step 200, ~0m00s left")
+
+
+def test_a_run_terminated_by_a_signal_ends_killed_in_mlflow(root, source_cache):
+    """SIGTERM (a scheduler's kill or timeout) while a run computes: its MLflow run ends KILLED,
+    with the points logged so far, and no result file is written."""
+    import signal
+    import subprocess
+    import time
+
+    command = [sys.executable, "-m", "mediated_transfer", "cell=none_0", "seed=0",
+               *_common(root, source_cache), "scale.budget=4000000", "scale.eval_points=400"]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline:
+            runs = tracking.find_runs(_settings(root), "linear_q_rbf")
+            if runs and _settings(root).client().get_metric_history(runs[0].info.run_id, "mean_reward"):
+                break
+            time.sleep(0.5)
+        else:
+            pytest.fail("the run logged no evaluation point within 120 s")
+        process.send_signal(signal.SIGTERM)
+        assert process.wait(timeout=60) != 0
+    finally:
+        process.kill()
+    [run] = tracking.find_runs(_settings(root), "linear_q_rbf")
+    assert run.info.status == "KILLED"
+    assert not list(root.rglob("result.json"))

@@ -152,3 +152,51 @@ def test_parallel_workers_share_a_prepared_sqlite_store(tmp_path):
         assert sorted(pool.map(_worker, [(uri, 0), (uri, 1)])) == [0, 1]
     runs = tracking.find_runs(tracking.TrackingSettings(uri), "table_x")
     assert sorted(r.data.tags["run_key"] for r in runs) == sorted(f"k/{s}/{i}" for s in (0, 1) for i in range(3))
+
+
+# --- runs followed live -------------------------------------------------------------------------
+def _live(settings, key="multirun/t/quick/none_0/seed=0@abc"):
+    return tracking.LiveRun(settings, "table_x", key=key, run_name="none_0/seed=0",
+                            params={"seed": "0"}, tags={"table": "table_x", "cell": "none_0"})
+
+
+def test_a_live_run_shows_each_point_while_it_runs_with_its_wall_clock_time(settings):
+    import time
+
+    live = _live(settings)
+    client = settings.client()
+    for step, reward in [(100, 1.0), (200, 4.0), (300, 9.0)]:
+        time.sleep(0.01)
+        live.evaluation(step, reward, reward / 10)
+        run = client.get_run(live.run_id)
+        assert run.info.status == "RUNNING"
+        history = client.get_metric_history(live.run_id, "mean_reward")
+        assert [m.step for m in history] == [s for s in (100, 200, 300) if s <= step]
+    stamps = [m.timestamp for m in history]
+    assert stamps == sorted(stamps) and len(set(stamps)) == 3 and min(stamps) >= run.info.start_time > 0
+    run_id = live.run_id
+    live.finish(synthetic_result(curve=(1.0, 4.0, 9.0)))
+    finished = client.get_run(run_id)
+    assert finished.info.status == "FINISHED" and finished.info.end_time >= max(stamps)
+    assert finished.data.metrics["reward_loss"] == pytest.approx(synthetic_result(curve=(1.0, 4.0, 9.0)).reward_loss)
+    assert finished.data.tags["mlflow.source.git.commit"]
+    # Logging the same run again from its files finds it: no duplicate.
+    assert _log(settings, synthetic_result(), key="multirun/t/quick/none_0/seed=0@abc") == run_id
+
+
+@pytest.mark.parametrize("status", ["KILLED", "FAILED"])
+def test_a_live_run_that_stops_early_is_not_left_running(settings, status):
+    live = _live(settings)
+    live.evaluation(100, 1.0, 0.1)
+    run_id = live.run_id
+    live.end(status)
+    assert settings.client().get_run(run_id).info.status == status
+    # A rerun deletes it and follows the new run.
+    again = _live(settings)
+    assert again.run_id != run_id
+    assert settings.client().get_run(run_id).info.lifecycle_stage == "deleted"
+
+
+def test_table_experiments_open_on_the_runs_view(settings):
+    experiment_id = tracking.prepare(settings, "table_y")
+    assert settings.client().get_experiment(experiment_id).tags["mlflow.experimentKind"] == "custom_model_development"

@@ -9,9 +9,12 @@ so running an interrupted sweep again skips every finished run and computes only
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -49,30 +52,14 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
         stale, result = found.stale(), found
     if found is not None and not (stale and cfg.rerun_stale):
         status = "exists"
+        if cfg.tracking.enabled:  # logged from its files, unless MLflow has it already
+            tags = run_tags(cfg, folder, spec, variant, str(result.code.get("digest", "")))
+            tracking.log_run(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                             run_name=run_name(cfg, variant), result=result,
+                             params=tracking.flatten(resolved), tags=tags, artifacts=_artifacts(folder))
     else:
-        from .run import execute_run
-
-        _limit_threads(int(cfg.threads_per_run))
-        every = spec.budget // spec.eval_points
-        report = None if sweep_dir is not None else progress.single_run_progress(spec)
-        result = execute_run(spec, progress=report, progress_every=every)
-        result.config = resolved
-        result.write(folder)
+        result = _compute(cfg, spec, folder, resolved, sweep_dir, variant)
         status, stale = "done", None
-
-    if cfg.tracking.enabled:
-        settings = tracking.TrackingSettings.from_config(cfg.tracking)
-        tags = run_tags(cfg, folder, spec, variant, str(result.code.get("digest", "")))
-        tracking.log_run(
-            settings,
-            experiment=str(cfg.name),
-            key=tags["run_key"],
-            run_name=run_name(cfg, variant),
-            result=result,
-            params=tracking.flatten(resolved),
-            tags=tags,
-            artifacts=_artifacts(folder),
-        )
     label = f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
     sweep_name = f"{cfg.name}/{cfg.scale.name}"
     run = "" if sweep_dir is None else folder.resolve().relative_to(Path(sweep_dir).resolve()).as_posix()
@@ -80,6 +67,64 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
                                      None if sweep_dir is None else Path(sweep_dir), run, stale))
     return {"cell": str(cfg.cell), "seed": int(cfg.seed), "variant": variant, "status": status,
             "stale": stale, "reward_loss": result.reward_loss, "folder": str(folder)}
+
+
+def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, variant: str) -> RunResult:
+    """Run the learning run, followed live in MLflow; write its result into ``folder``."""
+    from .provenance import code_version
+    from .run import execute_run
+
+    _limit_threads(int(cfg.threads_per_run))
+    every = spec.budget // spec.eval_points
+    watch = None if sweep_dir is not None else progress.SingleRunProgress(spec)
+    live = None
+    if cfg.tracking.enabled:
+        tags = run_tags(cfg, folder, spec, variant, code_version(spec.algorithm)["digest"])
+        live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                                run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
+                                tags=tags)
+
+    def evaluated(step: int, mean_reward: float, success_rate: float) -> None:
+        if watch is not None:
+            watch.evaluated(step, mean_reward, success_rate)
+        if live is not None:
+            live.evaluation(step, mean_reward, success_rate)
+
+    try:
+        with _interrupt_on_sigterm():
+            result = execute_run(spec, progress=watch, progress_every=every, on_evaluation=evaluated)
+        result.config = resolved
+        result.write(folder)
+    except BaseException as error:
+        if live is not None:
+            # Ctrl-C, SIGTERM (a scheduler's kill, a timeout): KILLED; anything else: FAILED.
+            live.end("KILLED" if isinstance(error, (KeyboardInterrupt, SystemExit)) else "FAILED")
+        raise
+    if live is not None:
+        live.finish(result, _artifacts(folder))
+    return result
+
+
+@contextlib.contextmanager
+def _interrupt_on_sigterm():
+    """SIGTERM as KeyboardInterrupt while a run computes, so its MLflow run ends KILLED (the
+    default handler would end the process on the spot). Only the main thread can set it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _settings(cfg: DictConfig) -> tracking.TrackingSettings:
+    return tracking.TrackingSettings.from_config(cfg.tracking)
 
 
 def _artifacts(folder: Path) -> list[Path]:

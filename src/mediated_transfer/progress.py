@@ -7,7 +7,7 @@ import logging
 import math
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 from .sweep import PLAN_PREFIX
 
@@ -18,17 +18,24 @@ if TYPE_CHECKING:
 log = logging.getLogger("mediated_transfer")
 
 
-def single_run_progress(spec: "RunSpec") -> Callable[[int, int], None]:
-    """A callback for execute_run: ``<run>: step k/n, steps/s, ~time left``."""
-    started = time.perf_counter()
+class SingleRunProgress:
+    """Progress of a single run, as execute_run's callbacks: ``<run>: step k/n, steps/s,
+    <R> of the latest evaluation point, ~time left``."""
 
-    def report(step: int, budget: int) -> None:
-        elapsed = time.perf_counter() - started
+    def __init__(self, spec: "RunSpec"):
+        self.spec, self.started = spec, time.perf_counter()
+        self.latest: tuple[int, float, float] | None = None
+
+    def evaluated(self, step: int, mean_reward: float, success_rate: float) -> None:
+        self.latest = step, mean_reward, success_rate
+
+    def __call__(self, step: int, budget: int) -> None:
+        elapsed = time.perf_counter() - self.started
         left = elapsed * (budget - step) / step if step else math.nan
-        log.info("%s: step %d/%d, %.0f steps/s, ~%s left", spec.describe(), step, budget,
-                 step / elapsed if elapsed > 0 else math.nan, duration(left))
-
-    return report
+        reward = "" if self.latest is None else (
+            f", <R> {self.latest[1]:.2f} ({self.latest[2]:.0%} solved) at step {self.latest[0]}")
+        log.info("%s: step %d/%d, %.0f steps/s%s, ~%s left", self.spec.describe(), step, budget,
+                 step / elapsed if elapsed > 0 else math.nan, reward, duration(left))
 
 
 def run_line(label: str, result: "RunResult", status: str, sweep_name: str, sweep_dir: Path | None,

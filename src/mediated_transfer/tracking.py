@@ -7,6 +7,12 @@ metric series ``mean_reward`` and ``success_rate`` (step = learning step), ``rew
 A run that never reaches the threshold has no ``time_to_threshold`` metric and the tag
 ``time_to_threshold=never`` (a number would have to pretend a step).
 
+A run being computed is followed live (``LiveRun``): its MLflow run is created when training
+starts, each evaluation point is logged as it is measured, with its wall-clock time, so a long
+run's curve grows in the UI, and the run ends FINISHED with the training's end time, or KILLED
+(interrupted) or FAILED (an error). A run found finished on disk but not in MLflow is logged
+from its result files (``log_run``).
+
 Logging is idempotent: every run carries a key (its output folder relative to paths.root) and
 is only created when no finished run with that key exists; a run left unfinished by an
 interruption is deleted and logged again. So re-running a sweep never duplicates a run.
@@ -19,6 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +33,9 @@ from typing import Any
 
 from .results import RunResult
 
+EXPERIMENT_KIND = {"mlflow.experimentKind": "custom_model_development"}
+"""MLflow 3's UI opens an experiment of unknown kind on its GenAI overview; this kind opens it
+on the runs table and their charts."""
 KIND_RUN = "run"
 KIND_SUMMARY = "cell_summary"
 NEVER = "never"
@@ -69,13 +79,16 @@ def _experiment_id(client, settings: TrackingSettings, name: str) -> str:
     if found is not None:
         if found.lifecycle_stage == "deleted":
             client.restore_experiment(found.experiment_id)
+        if any(found.tags.get(k) != v for k, v in EXPERIMENT_KIND.items()):
+            for k, v in EXPERIMENT_KIND.items():  # experiments created before the tag existed
+                client.set_experiment_tag(found.experiment_id, k, v)
         return found.experiment_id
     location = None
     if settings.artifact_location is not None:
         # One folder per experiment (table), as MLflow's own file layout has it.
         location = (Path(settings.artifact_location).resolve() / name).as_uri()
     try:
-        return client.create_experiment(name, artifact_location=location)
+        return client.create_experiment(name, artifact_location=location, tags=EXPERIMENT_KIND)
     except MlflowException:
         # Created meanwhile by another process.
         found = client.get_experiment_by_name(name)
@@ -94,7 +107,8 @@ def log_run(
     tags: Mapping[str, str],
     artifacts: Iterable[Path] = (),
 ) -> str:
-    """Log one learning run unless a finished MLflow run with ``key`` exists; returns its id."""
+    """Log one learning run from its result unless a finished MLflow run with ``key`` exists;
+    returns its id. (A run computed in this process is logged live instead: ``LiveRun``.)"""
     from mlflow.entities import Metric
 
     client = settings.client()
@@ -104,6 +118,71 @@ def log_run(
         return existing
     metrics = [Metric("mean_reward", float(r), 0, int(s)) for s, r in zip(result.steps, result.mean_reward)]
     metrics += [Metric("success_rate", float(p), 0, int(s)) for s, p in zip(result.steps, result.success_rate)]
+    metrics += _result_metrics(result, timestamp=0)
+    all_tags = {**tags, **_result_tags(result)}
+    return _create(client, experiment_id, key, run_name, metrics, params, all_tags, artifacts)
+
+
+class LiveRun:
+    """The MLflow run of a learning run being computed, logged as it goes.
+
+    Created RUNNING (start time: now) when training starts, after any unfinished run with the
+    same key (an earlier interruption) is deleted; ``evaluation`` logs a point of the curve
+    with its wall-clock time; ``finish`` logs the result's metrics and artifacts and ends it
+    FINISHED; ``end("KILLED" | "FAILED")`` ends it early. A run that already has a finished
+    MLflow run (another process logged it) is not followed: every call does nothing.
+    """
+
+    def __init__(self, settings: TrackingSettings, experiment: str, key: str, run_name: str,
+                 params: Mapping[str, Any], tags: Mapping[str, str]):
+        from mlflow.entities import Param
+
+        self.client = client = settings.client()
+        experiment_id = _experiment_id(client, settings, experiment)
+        self.run_id: str | None = None
+        if _existing(client, experiment_id, key) is not None:
+            return
+        tags = {**{k: str(v) for k, v in tags.items()}, "kind": KIND_RUN, "run_key": key,
+                "run_key_hash": key_hash(key)}
+        self.run_id = client.create_run(experiment_id, run_name=run_name, tags=tags).info.run_id
+        params_list = [Param(k, v) for k, v in params.items()]
+        for i in range(0, len(params_list), _BATCH["params"]):
+            client.log_batch(self.run_id, params=params_list[i:i + _BATCH["params"]])
+
+    def evaluation(self, step: int, mean_reward: float, success_rate: float) -> None:
+        from mlflow.entities import Metric
+
+        if self.run_id is None:
+            return
+        now = _now_ms()
+        self.client.log_batch(self.run_id, metrics=[
+            Metric("mean_reward", float(mean_reward), now, int(step)),
+            Metric("success_rate", float(success_rate), now, int(step))])
+
+    def finish(self, result: RunResult, artifacts: Iterable[Path] = ()) -> None:
+        if self.run_id is None:
+            return
+        metrics = _result_metrics(result, timestamp=_now_ms())
+        for i in range(0, len(metrics), _BATCH["metrics"]):
+            self.client.log_batch(self.run_id, metrics=metrics[i:i + _BATCH["metrics"]])
+        for k, v in _result_tags(result).items():
+            self.client.set_tag(self.run_id, k, v)
+        _log_artifacts(self.client, self.run_id, artifacts)
+        self.end("FINISHED")  # last: a run interrupted before this is recognised and redone
+
+    def end(self, status: str) -> None:
+        if self.run_id is not None:
+            self.client.set_terminated(self.run_id, status, end_time=_now_ms())
+            self.run_id = None
+
+
+def _now_ms() -> int:
+    return int(time.time() * 1000)
+
+
+def _result_metrics(result: RunResult, timestamp: int) -> list:
+    from mlflow.entities import Metric
+
     scalars = {
         "reward_loss": result.reward_loss,
         "time_to_threshold": result.time_to_threshold,
@@ -115,16 +194,21 @@ def log_run(
         "first_target_reward_step": result.first_target_reward_step,
         **{f"learner.{k}": v for k, v in result.learner_stats.items()},
     }
-    metrics += [Metric(k, float(v), 0, 0) for k, v in scalars.items() if _is_number(v)]
-    all_tags = {**tags, "kind": KIND_RUN}
+    return [Metric(k, float(v), timestamp, 0) for k, v in scalars.items() if _is_number(v)]
+
+
+def _result_tags(result: RunResult) -> dict[str, str]:
+    tags = {"kind": KIND_RUN}
     # MLflow's own source tags: the UI shows the commit a run was computed with.
     if result.code.get("commit"):
-        all_tags["mlflow.source.git.commit"] = str(result.code["commit"])
+        tags["mlflow.source.git.commit"] = str(result.code["commit"])
+        tags["mlflow.source.name"] = "mediated_transfer"
+        tags["mlflow.source.type"] = "LOCAL"
     if result.code.get("dirty") is not None:
-        all_tags["code_dirty"] = str(bool(result.code["dirty"])).lower()
+        tags["code_dirty"] = str(bool(result.code["dirty"])).lower()
     if result.time_to_threshold is None:
-        all_tags["time_to_threshold"] = NEVER
-    return _create(client, experiment_id, key, run_name, metrics, params, all_tags, artifacts)
+        tags["time_to_threshold"] = NEVER
+    return tags
 
 
 def log_summary(
@@ -227,12 +311,16 @@ def _create(client, experiment_id, key, run_name, metrics, params, tags, artifac
         client.log_batch(run_id, metrics=metrics[i:i + _BATCH["metrics"]])
     for i in range(0, len(params_list), _BATCH["params"]):
         client.log_batch(run_id, params=params_list[i:i + _BATCH["params"]])
-    for path in artifacts:
-        # Hydra's record of the run (config, overrides) goes into a folder of its own.
-        client.log_artifact(run_id, str(path), "hydra" if Path(path).parent.name == ".hydra" else None)
+    _log_artifacts(client, run_id, artifacts)
     # FINISHED last: a run interrupted before this line is recognised and redone.
     client.set_terminated(run_id, "FINISHED")
     return run_id
+
+
+def _log_artifacts(client, run_id: str, artifacts: Iterable[Path]) -> None:
+    for path in artifacts:
+        # Hydra's record of the run (config, overrides) goes into a folder of its own.
+        client.log_artifact(run_id, str(path), "hydra" if Path(path).parent.name == ".hydra" else None)
 
 
 def _is_number(value: Any, allow_nan: bool = False) -> bool:
