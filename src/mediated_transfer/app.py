@@ -51,11 +51,15 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
         status = "exists"
     else:
         from .run import execute_run
+        from .saved_learner import forget_learner, save_learner
 
         _limit_threads(int(cfg.threads_per_run))
         every = spec.budget // spec.eval_points
         report = None if sweep_dir is not None else progress.single_run_progress(spec)
-        result = execute_run(spec, progress=report, progress_every=every)
+        # The folder's learner must be this run's: an older one goes before the run starts.
+        forget_learner(folder)
+        save = (lambda learner: save_learner(learner, spec, folder)) if cfg.save_learner else None
+        result = execute_run(spec, progress=report, progress_every=every, on_finish=save)
         result.config = resolved
         result.write(folder)
         status, stale = "done", None
