@@ -73,8 +73,12 @@ def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, var
     """Run the learning run, followed live in MLflow; write its result into ``folder``."""
     from .provenance import code_version
     from .run import execute_run
+    from .saved_learner import forget_learner, save_learner
 
     _limit_threads(int(cfg.threads_per_run))
+    # The folder's learner must be this run's: an older one goes before the run starts.
+    forget_learner(folder)
+    save = (lambda learner: save_learner(learner, spec, folder)) if cfg.save_learner else None
     every = spec.budget // spec.eval_points
     watch = None if sweep_dir is not None else progress.SingleRunProgress(spec)
     live = None
@@ -92,7 +96,8 @@ def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, var
 
     try:
         with _interrupt_on_sigterm():
-            result = execute_run(spec, progress=watch, progress_every=every, on_evaluation=evaluated)
+            result = execute_run(spec, progress=watch, progress_every=every, on_evaluation=evaluated,
+                                 on_finish=save)
         result.config = resolved
         result.write(folder)
     except BaseException as error:

@@ -141,6 +141,7 @@ class RunConfig:
     source_set_seed: int = MISSING
     threads_per_run: int = MISSING
     rerun_stale: bool = MISSING
+    save_learner: bool = MISSING
     strategy: str = MISSING
     n_source: int = MISSING
     paths: PathsConfig = MISSING

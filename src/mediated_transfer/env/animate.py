@@ -1,10 +1,12 @@
 """Write an animation (GIF) of one episode, so a person can watch a policy act.
 
     python -m mediated_transfer.env.animate --scenario target --policy scripted \\
-        --out reports/episode.gif --seed 0
+        --out reports/episode.gif --seed 1
+    python -m mediated_transfer.env.animate --run <run folder> --seed 3 --out reports/trained.gif
 
 A policy is a callable observation -> action; ``POLICIES`` maps each name to a factory
-``(env, seed) -> policy``. Add an entry (e.g. a trained learner's greedy policy) to offer more.
+``(env, seed) -> policy``. Add an entry to offer more. ``--run`` shows instead the greedy
+policy of a run's saved learner (saved_learner.py), in the run's world.
 """
 
 from __future__ import annotations
@@ -82,7 +84,9 @@ def save_gif(frames: list[np.ndarray], path: str | Path, fps: float = 4.0) -> Pa
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description="Write a GIF of one episode.")
     parser.add_argument("--scenario", choices=SCENARIOS, default="target")
-    parser.add_argument("--policy", choices=sorted(POLICIES), default="scripted")
+    parser.add_argument("--policy", choices=sorted(POLICIES), default=None, help="default: scripted")
+    parser.add_argument("--run", default=None,
+                        help="a run's folder: its saved learner's greedy policy, in the run's world")
     parser.add_argument("--out", default="reports/episode.gif")
     parser.add_argument("--seed", type=int, default=0, help="seeds the task, the noise, the policy")
     parser.add_argument("--noise", type=float, default=None,
@@ -90,15 +94,25 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--fps", type=float, default=4.0)
     args = parser.parse_args(argv)
 
-    config = WorldConfig()
+    config, label = WorldConfig(), args.policy or "scripted"
+    if args.run is not None:
+        if args.policy is not None:
+            parser.error("--run shows the run's learner: leave out --policy")
+        from ..saved_learner import SavedLearnerError, greedy_policy
+
+        try:
+            learned, spec = greedy_policy(args.run)
+        except SavedLearnerError as error:
+            raise SystemExit(f"Cannot animate: {error}") from None
+        config, label = spec.world, f"trained ({spec.describe()})"
     if args.noise is not None:
         config = dataclasses.replace(config, action_noise=args.noise)
     env = MediatedInteractionEnv(args.scenario, config, render_mode="rgb_array")
-    policy = POLICIES[args.policy](env, args.seed)
+    policy = learned if args.run is not None else POLICIES[label](env, args.seed)
     frames, summary = record_episode(env, policy, seed=args.seed)
     path = save_gif(frames, args.out, args.fps)
     outcome = "success" if summary["is_success"] else "no success"
-    print(f"{path}: {args.policy} policy on a {args.scenario} task, {outcome} "
+    print(f"{path}: {label} policy on a {args.scenario} task, {outcome} "
           f"after {summary['steps']} steps")
     return summary
 
