@@ -49,6 +49,8 @@ reports: $(STAMP) ## Build reports/ (tables, figures, MLflow summaries) from the
 	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
 
 mlflow-ui: $(STAMP) ## Browse the runs in MLflow's UI, served on 127.0.0.1 only (MLFLOW_PORT=5000)
+	@echo "Each table's training runs (MLflow 3 opens an experiment on its GenAI overview instead):"
+	@$(BIN)/python -m mediated_transfer.tracking sqlite:///$(MLFLOW_DB) http://127.0.0.1:$(MLFLOW_PORT)
 	$(BIN)/mlflow ui --backend-store-uri sqlite:///$(MLFLOW_DB) --host 127.0.0.1 --port $(MLFLOW_PORT)
 
 # --- tuning: Table I (README: "Tuning") --------------------------------------------------------

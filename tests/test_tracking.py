@@ -197,6 +197,7 @@ def test_a_live_run_that_stops_early_is_not_left_running(settings, status):
     assert settings.client().get_run(run_id).info.lifecycle_stage == "deleted"
 
 
-def test_table_experiments_open_on_the_runs_view(settings):
+def test_the_ui_links_open_each_experiments_runs(settings):
     experiment_id = tracking.prepare(settings, "table_y")
-    assert settings.client().get_experiment(experiment_id).tags["mlflow.experimentKind"] == "custom_model_development"
+    assert tracking.runs_view_links(settings, "http://127.0.0.1:5000/") == [
+        f"table_y: http://127.0.0.1:5000/#/experiments/{experiment_id}/runs"]

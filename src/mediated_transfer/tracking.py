@@ -33,9 +33,6 @@ from typing import Any
 
 from .results import RunResult
 
-EXPERIMENT_KIND = {"mlflow.experimentKind": "custom_model_development"}
-"""MLflow 3's UI opens an experiment of unknown kind on its GenAI overview; this kind opens it
-on the runs table and their charts."""
 KIND_RUN = "run"
 KIND_SUMMARY = "cell_summary"
 NEVER = "never"
@@ -79,16 +76,13 @@ def _experiment_id(client, settings: TrackingSettings, name: str) -> str:
     if found is not None:
         if found.lifecycle_stage == "deleted":
             client.restore_experiment(found.experiment_id)
-        if any(found.tags.get(k) != v for k, v in EXPERIMENT_KIND.items()):
-            for k, v in EXPERIMENT_KIND.items():  # experiments created before the tag existed
-                client.set_experiment_tag(found.experiment_id, k, v)
         return found.experiment_id
     location = None
     if settings.artifact_location is not None:
         # One folder per experiment (table), as MLflow's own file layout has it.
         location = (Path(settings.artifact_location).resolve() / name).as_uri()
     try:
-        return client.create_experiment(name, artifact_location=location, tags=EXPERIMENT_KIND)
+        return client.create_experiment(name, artifact_location=location)
     except MlflowException:
         # Created meanwhile by another process.
         found = client.get_experiment_by_name(name)
@@ -331,3 +325,17 @@ def _is_number(value: Any, allow_nan: bool = False) -> bool:
     except (TypeError, ValueError):
         return False
     return math.isfinite(number) or (allow_nan and math.isnan(number))
+
+
+def runs_view_links(settings: TrackingSettings, ui: str) -> list[str]:
+    """``<experiment>: <url>`` of each experiment's table of training runs in the UI at ``ui``.
+    MLflow 3's UI opens an experiment on its GenAI overview; this address opens the runs."""
+    return [f"{e.name}: {ui.rstrip('/')}/#/experiments/{e.experiment_id}/runs"
+            for e in settings.client().search_experiments() if e.name != "Default"]
+
+
+if __name__ == "__main__":  # `make mlflow-ui` prints where the runs are before serving them
+    import sys
+
+    for line in runs_view_links(TrackingSettings(sys.argv[1]), sys.argv[2]):
+        print(line)
