@@ -31,6 +31,8 @@ LEARNER_SOURCES = {
 }
 """Learner files that only one algorithm runs: a change to the DQN does not make linear
 results stale, nor the other way round."""
+NOT_COMPUTING = ("env/render.py", "env/animate.py", "env/scripted.py")
+"""In the computing folders but never called by a run: drawing, GIFs, scripted policies."""
 
 
 @functools.cache
@@ -50,7 +52,7 @@ def source_digest(package: Path = PACKAGE, algorithm: str | None = None) -> str:
     run: comments, docstrings and layout do not change what a run computes, so they do not
     change the digest."""
     others = {file for name, files in LEARNER_SOURCES.items() if algorithm is not None
-              and name != algorithm for file in files}
+              and name != algorithm for file in files} | set(NOT_COMPUTING)
     digest = hashlib.sha256()
     for entry in COMPUTING_SOURCES:
         path = package / entry
