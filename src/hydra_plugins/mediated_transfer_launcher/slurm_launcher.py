@@ -20,7 +20,7 @@ from typing import Any, Sequence
 
 from hydra.core.config_store import ConfigStore
 from hydra.core.singleton import Singleton
-from hydra.core.utils import JobReturn
+from hydra.core.utils import JobReturn, JobStatus
 from hydra_plugins.hydra_submitit_launcher.config import BaseQueueConf, SlurmQueueConf
 from hydra_plugins.hydra_submitit_launcher.submitit_launcher import BaseSubmititLauncher, SlurmLauncher
 from omegaconf import OmegaConf, open_dict
@@ -55,8 +55,19 @@ class MediatedSlurmLauncher(SlurmLauncher):
                   singleton_state: dict) -> list[tuple[str, JobReturn]]:
         """In the SLURM job: the group's runs one after the other, each as its own Hydra job
         (its folder, log and MLflow run); a failed run does not stop the others."""
-        return [(run, self(overrides, "hydra.sweep.dir", index, f"job_id_for_{index}", singleton_state))
-                for overrides, index, run in group]
+        from mediated_transfer.slurm.errors import reached_time_limit
+
+        done = []
+        for overrides, index, run in group:
+            if done and reached_time_limit(done[-1][1]):
+                # submitit's signal before the time limit stopped a run: the next ones would be
+                # killed halfway; they are reported as not started, and a rerun computes them.
+                ret = JobReturn()
+                ret.status, ret._return_value = JobStatus.FAILED, TimeoutError("not started: the job reached its time limit")
+                done.append((run, ret))
+                continue
+            done.append((run, self(overrides, "hydra.sweep.dir", index, f"job_id_for_{index}", singleton_state)))
+        return done
 
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
         from mediated_transfer.config.compose import ConfigError

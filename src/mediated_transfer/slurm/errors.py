@@ -9,6 +9,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from hydra.core.utils import JobReturn, JobStatus
+
 # Pending reasons SLURM never resolves by waiting: the request is above a limit.
 HOPELESS_REASONS = {
     "PartitionTimeLimit": "timeout_min is above the partition's time limit: lower hydra.launcher.timeout_min",
@@ -60,9 +62,25 @@ def ended_without_result(job_id: str, runs: list[str], log: Path | None, timeout
     return f"job {job_id} ({what}) ended without a result{': ' + last if last else ''}{where}"
 
 
-def run_failed(run: str, error: BaseException, log: Path | None) -> str:
-    first = str(error).strip().splitlines()[0] if str(error).strip() else ""
+def reached_time_limit(ret: JobReturn) -> bool:
+    """A run stopped by submitit's signal before the job's time limit (UncompletedJobError,
+    "timed-out"), or not started after one."""
+    error = ret._return_value if ret.status == JobStatus.FAILED else None
+    return isinstance(error, TimeoutError) or (
+        type(error).__name__ == "UncompletedJobError" and "timed-out" in str(error))
+
+
+def run_failed(run: str, ret: JobReturn, log: Path | None, timeout_min: float, runs_per_job: int) -> str:
+    """One line for a run that failed inside its job."""
+    error = ret._return_value
     where = f"; log: {log}" if log is not None else ""
+    if reached_time_limit(ret):
+        what = "not started" if isinstance(error, TimeoutError) else "stopped"
+        per = f" for {runs_per_job} runs" if runs_per_job > 1 else ""
+        return (f"run {run} {what}: its job reached its time limit (hydra.launcher.timeout_min="
+                f"{timeout_min:g}{per}; submitit stops runs signal_delay_s before it): raise timeout_min, "
+                f"or lower runs_per_job; a rerun keeps the runs that finished{where}")
+    first = str(error).strip().splitlines()[0] if str(error).strip() else ""
     return f"run {run} failed: {type(error).__name__}: {first}{where}"
 
 

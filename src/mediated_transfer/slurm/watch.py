@@ -123,7 +123,7 @@ def _collect(sub: Submitted, outcome: Outcome, timeout_min: float, runs_per_job:
         return
     for run, ret in returns:  # the launcher's run_group: (run folder, JobReturn) per run
         if ret.status == JobStatus.FAILED:
-            outcome.errors.append(errors.run_failed(run, ret._return_value, _log(sub.job)))
+            outcome.errors.append(errors.run_failed(run, ret, _log(sub.job), timeout_min, runs_per_job))
         else:
             outcome.returns.append(ret)
 
