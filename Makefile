@@ -37,13 +37,25 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot refine table1
+.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot refine table1 slurm-check
+
+# On SLURM (ARGS="hydra/launcher=slurm ..."), every table is queued first (wait=false), then
+# each command again waits for its queued jobs: the tables share their time in the queue.
+ON_SLURM := $(findstring hydra/launcher=slurm,$(ARGS))
 
 reproduce-tables: $(STAMP) ## Run the Tables II-IV sweeps at SCALE=paper|quick|smoke (resumable), then build reports/
+ifneq ($(ON_SLURM),)
+	@for experiment in $(EXPERIMENTS); do \
+		$(BIN)/python -m mediated_transfer experiment=$$experiment scale=$(SCALE) $(ARGS) hydra.launcher.wait=false || exit 1; \
+	done
+endif
 	@for experiment in $(EXPERIMENTS); do \
 		$(BIN)/python -m mediated_transfer experiment=$$experiment scale=$(SCALE) $(ARGS) || exit 1; \
 	done
 	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
+
+slurm-check: $(STAMP) ## Opt-in, not CI: the SLURM preset on a throwaway single-node SLURM (Debian's packages; root)
+	PYTHON=$(BIN)/python bash scripts/slurm_check.sh
 
 reports: $(STAMP) ## Build reports/ (tables, figures, MLflow summaries) from the finished runs at SCALE
 	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)

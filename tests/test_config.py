@@ -108,7 +108,7 @@ def test_tracking_options_give_settings_or_disable_tracking(hydra_context, optio
 @pytest.mark.parametrize("launcher, target", [
     ("parallel", "hydra_plugins.hydra_joblib_launcher.joblib_launcher.JoblibLauncher"),
     ("submitit_local", "hydra_plugins.hydra_submitit_launcher.submitit_launcher.LocalLauncher"),
-    ("slurm", "hydra_plugins.hydra_submitit_launcher.submitit_launcher.SlurmLauncher"),
+    ("slurm", "hydra_plugins.mediated_transfer_launcher.slurm_launcher.MediatedSlurmLauncher"),
     ("basic", "hydra._internal.core_plugins.basic_launcher.BasicLauncher"),
 ])
 def test_launcher_presets_compose_and_name_an_importable_launcher(hydra_context, launcher, target):

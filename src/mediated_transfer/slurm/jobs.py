@@ -1,0 +1,67 @@
+"""Which runs of a sweep need a SLURM job, and how they are packed into jobs.
+
+A finished run would only start Python on a node to skip itself (app.run_job), so it is settled
+in the launching process instead; the runs left are packed ``runs_per_job`` to a job, in sweep
+order (the seeds of a cell are adjacent), because starting Python costs a job ~8 s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from omegaconf import DictConfig
+
+from ..config.compose import ConfigError
+from ..results import RunResult
+from ..sweep import _with_seed, _without_seed
+
+
+@dataclass(frozen=True)
+class PlannedRun:
+    """One job of Hydra's sweep: its overrides, its index in the sweep, its config and folder."""
+
+    overrides: tuple[str, ...]
+    index: int
+    config: DictConfig
+    folder: Path
+
+
+def is_finished(folder: Path, rerun_stale: bool) -> bool:
+    """True when app.run_job would skip the run in ``folder``: a result is there, and it is not a
+    stale one that ``rerun_stale`` asks to recompute."""
+    if not RunResult.exists(folder):
+        return False
+    return not (rerun_stale and RunResult.read(folder).stale() is not None)
+
+
+def plan_runs(job_overrides: Sequence[Sequence[str]], initial_index: int,
+              load: Callable[[list[str]], DictConfig]) -> list[PlannedRun]:
+    """Every job's config and folder. ``load`` composes a job's config as Hydra does for the job
+    (load_sweep_config); seeds do not change the rest, so it is called once per distinct rest."""
+    composed: dict[tuple[str, ...], DictConfig] = {}
+    runs = []
+    for offset, overrides in enumerate(job_overrides):
+        rest = _without_seed(overrides)
+        if rest not in composed:
+            composed[rest] = load(list(overrides))
+        cfg = _with_seed(composed[rest], overrides)
+        folder = Path(str(cfg.hydra.sweep.dir)) / str(cfg.hydra.sweep.subdir)
+        runs.append(PlannedRun(tuple(overrides), initial_index + offset, cfg, folder))
+    return runs
+
+
+def split_finished(runs: Sequence[PlannedRun]) -> tuple[list[PlannedRun], list[PlannedRun]]:
+    """(finished, to compute), each in sweep order."""
+    finished, pending = [], []
+    for run in runs:
+        (finished if is_finished(run.folder, bool(run.config.rerun_stale)) else pending).append(run)
+    return finished, pending
+
+
+def group_runs(runs: Sequence[PlannedRun], runs_per_job: int) -> list[list[PlannedRun]]:
+    """Consecutive runs, ``runs_per_job`` to a job (the last job may carry fewer)."""
+    if not isinstance(runs_per_job, int) or isinstance(runs_per_job, bool) or runs_per_job < 1:
+        raise ConfigError(f"hydra.launcher.runs_per_job={runs_per_job!r}: must be an integer >= 1")
+    return [list(runs[i:i + runs_per_job]) for i in range(0, len(runs), runs_per_job)]
