@@ -382,3 +382,18 @@ def test_a_run_terminated_by_a_signal_ends_killed_in_mlflow(root, source_cache):
     [run] = tracking.find_runs(_settings(root), "linear_q_rbf")
     assert run.info.status == "KILLED"
     assert not list(root.rglob("result.json"))
+
+
+def test_a_run_claimed_by_another_process_is_skipped_at_once(root, source_cache, capsys):
+    """The same sweep launched twice: a run the other launch is computing is neither computed
+    nor logged again (nor its MLflow run touched)."""
+    from mediated_transfer.claim import claimed
+
+    folder = root / "multirun" / "table2_rbf" / "smoke" / "none_0" / "seed=0"
+    with claimed(folder) as mine:
+        assert mine
+        _run_cli("-m", "experiment=table2_rbf", "cell=none_0", "seed=0", "hydra/launcher=basic",
+                 *_common(root, source_cache))
+    assert "none_0 seed=0: being computed by another process, skipped" in capsys.readouterr().out
+    assert not _results(root / "multirun" / "table2_rbf" / "smoke")
+    assert not tracking.find_runs(_settings(root), "table2_rbf")

@@ -201,3 +201,17 @@ def test_the_ui_links_open_each_experiments_runs(settings):
     experiment_id = tracking.prepare(settings, "table_y")
     assert tracking.runs_view_links(settings, "http://127.0.0.1:5000/") == [
         f"table_y: http://127.0.0.1:5000/#/experiments/{experiment_id}/runs"]
+
+
+def _prepare(args):
+    uri, name = args
+    return tracking.prepare(tracking.TrackingSettings(uri), name)
+
+
+def test_two_sweeps_starting_together_on_a_new_store_both_prepare_it(tmp_path):
+    uri = f"sqlite:///{tmp_path / 'new' / 'mlflow.db'}"
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        ids = pool.map(_prepare, [(uri, "table_a"), (uri, "table_b")])
+    assert len(set(ids)) == 2
+    names = {e.name for e in tracking.TrackingSettings(uri).client().search_experiments()}
+    assert {"table_a", "table_b"} <= names

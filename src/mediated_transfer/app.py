@@ -25,6 +25,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
 from . import progress, tracking
+from .claim import claimed
 from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
 from .config.spec import check_same_run, run_spec
 from .identity import run_name, run_tags
@@ -43,6 +44,17 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
     """
     spec = run_spec(cfg)
     folder = Path(folder)
+    label = f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
+    with claimed(folder) as mine:
+        if not mine:
+            # Another launch (of this sweep or one that overlaps it) is computing this run.
+            log.info("%s: being computed by another process, skipped", label)
+            return {"cell": str(cfg.cell), "seed": int(cfg.seed), "variant": variant, "status": "busy",
+                    "stale": None, "reward_loss": None, "folder": str(folder)}
+        return _run_claimed(cfg, spec, folder, sweep_dir, variant, label)
+
+
+def _run_claimed(cfg: DictConfig, spec, folder: Path, sweep_dir, variant: str, label: str) -> dict:
     resolved = OmegaConf.to_container(cfg, resolve=True)
     assert isinstance(resolved, dict)
     found = RunResult.read(folder) if RunResult.exists(folder) else None
@@ -60,7 +72,6 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
     else:
         result = _compute(cfg, spec, folder, resolved, sweep_dir, variant)
         status, stale = "done", None
-    label = f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
     sweep_name = f"{cfg.name}/{cfg.scale.name}"
     run = "" if sweep_dir is None else folder.resolve().relative_to(Path(sweep_dir).resolve()).as_posix()
     log.info("%s", progress.run_line(label, result, status, sweep_name,

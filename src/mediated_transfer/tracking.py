@@ -23,8 +23,11 @@ The default store is SQLite. SQLite cannot be initialised by several processes a
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import math
+import os
 import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -64,9 +67,27 @@ class TrackingSettings:
 
 
 def prepare(settings: TrackingSettings, experiment: str) -> str:
-    """Create the store (if new) and the experiment (if missing); returns its id."""
-    client = settings.client()
-    return _experiment_id(client, settings, experiment)
+    """Create the store (if new) and the experiment (if missing); returns its id. For a SQLite
+    store this holds a lock beside it: two sweeps starting together on a new store would
+    otherwise both create its tables, and one would fail."""
+    with _store_lock(settings):
+        client = settings.client()
+        return _experiment_id(client, settings, experiment)
+
+
+@contextlib.contextmanager
+def _store_lock(settings: TrackingSettings):
+    if not settings.uri.startswith("sqlite:///"):
+        yield
+        return
+    lock = Path(settings.uri.removeprefix("sqlite:///") + ".lock")
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)  # waits for the other: creating the tables takes seconds
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def _experiment_id(client, settings: TrackingSettings, name: str) -> str:

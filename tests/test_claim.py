@@ -1,0 +1,43 @@
+"""One process at a time per run folder (claim.py): the second is told at once, and a claim
+dies with its holder."""
+
+import subprocess
+import sys
+import time
+
+from mediated_transfer.claim import CLAIM_FILE, claimed
+
+
+def test_a_held_claim_is_refused_and_free_again_once_released(tmp_path):
+    with claimed(tmp_path / "run") as first:
+        assert first
+        with claimed(tmp_path / "run") as second:
+            assert not second
+        with claimed(tmp_path / "other") as other:
+            assert other
+    with claimed(tmp_path / "run") as again:
+        assert again
+
+
+def test_a_claim_dies_with_its_process_even_on_sigkill(tmp_path):
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time\n"
+        "from mediated_transfer.claim import claimed\n"
+        f"with claimed({str(tmp_path)!r}):\n"
+        "    print('held', flush=True)\n"
+        "    time.sleep(600)\n")], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with claimed(tmp_path) as mine:
+            assert not mine
+    finally:
+        holder.kill()
+        holder.wait()
+    deadline = time.time() + 10
+    while True:
+        with claimed(tmp_path) as mine:
+            if mine:
+                break
+        assert time.time() < deadline, "the claim outlived its killed holder"
+        time.sleep(0.1)
+    assert (tmp_path / CLAIM_FILE).exists()
