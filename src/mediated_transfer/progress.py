@@ -46,7 +46,8 @@ def run_line(label: str, result: "RunResult", status: str, sweep_name: str, swee
         what = "found, skipped" if stale is None else f"found, STALE ({stale}; rerun_stale=true recomputes it)"
     else:
         what = f"{result.learning_steps_per_s:,.0f} steps/s"
-    line = f"{label}: L_R={result.reward_loss:.2f}, {what}"
+    outcome = f"FAILED ({result.failure})" if result.failed else f"L_R={result.reward_loss:.2f}"
+    line = f"{label}: {outcome}, {what}"
     if sweep_dir is None:
         return line
     count = sweep_progress(sweep_dir, run)

@@ -9,6 +9,7 @@ a half-written result that a later sweep would mistake for a finished one.
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -56,6 +57,13 @@ class RunResult:
     (provenance.code_version)."""
     results_format: int | None = None
     """provenance.RESULTS_FORMAT when written; None: written before formats were recorded."""
+    failure: str | None = None
+    """Why the run was stopped as failed (e.g. its learner diverged); None: it ran its budget.
+    A failed run's reward loss is NaN (null in result.json) and it has no time to threshold."""
+
+    @property
+    def failed(self) -> bool:
+        return self.failure is not None
 
     def write(self, folder: str | os.PathLike) -> Path:
         folder = Path(folder)
@@ -64,12 +72,17 @@ class RunResult:
         lines += [f"{s},{r!r},{p!r}" for s, r, p in zip(self.steps, self.mean_reward, self.success_rate)]
         atomic_write_text(folder / CURVE_FILE, "\n".join(lines) + "\n")
         # result.json last: its presence marks the run as finished.
-        atomic_write_text(folder / RESULT_FILE, json.dumps(asdict(self), indent=2, default=_plain) + "\n")
+        # Strict JSON: a non-finite number (a diverged learner's statistics, a failed run's
+        # reward loss) is written as null, which every JSON reader accepts.
+        data = _finite_or_null(json.loads(json.dumps(asdict(self), default=_plain)))
+        atomic_write_text(folder / RESULT_FILE, json.dumps(data, indent=2, allow_nan=False) + "\n")
         return folder / RESULT_FILE
 
     @classmethod
     def read(cls, folder: str | os.PathLike) -> "RunResult":
         data = json.loads((Path(folder) / RESULT_FILE).read_text())
+        if data.get("reward_loss") is None:  # written as null: not a number
+            data["reward_loss"] = math.nan
         return cls(**data)
 
     def stale(self) -> str | None:
@@ -89,3 +102,13 @@ def _plain(value):
     if isinstance(value, np.ndarray):
         return value.tolist()
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def _finite_or_null(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite_or_null(v) for v in value]
+    return value

@@ -155,12 +155,13 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     success: list[float] = []
     source_phase_end: int | None = None
     first_target_reward: int | None = None
+    failure: str | None = None
     step = 0
     env_seed: int | None = _stream_seed(spec.seed, _ENV_STREAM)
     learn_time = 0.0
     started = time.perf_counter()
     mark = started
-    while step < spec.budget:
+    while step < spec.budget and failure is None:
         task = strategy.next_task()
         # Without a task the env samples a target task from its own seeded generator.
         obs, _ = env.reset(seed=env_seed, options=None if task is None else {"task": task})
@@ -182,10 +183,13 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
                 success.append(p)
                 if on_evaluation is not None:
                     on_evaluation(step, r, p)
+                reason = learner.divergence()
+                if reason is not None:  # the rest of the budget would only repeat it
+                    failure = f"diverged by step {step}: {reason}"
                 mark = time.perf_counter()
             if progress is not None and step % progress_every == 0:
                 progress(step, spec.budget)
-            if terminated or truncated or step >= spec.budget:
+            if terminated or truncated or step >= spec.budget or failure is not None:
                 break
         learner.end_episode()
         if task is not None:
@@ -198,6 +202,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         on_finish(learner)
 
     rewards_arr = np.asarray(rewards)
+    # A failed run's partial curve has no reward loss or time to threshold: none is made up.
     return RunResult(
         algorithm=spec.algorithm,
         representation=spec.representation,
@@ -208,8 +213,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         steps=steps,
         mean_reward=rewards,
         success_rate=success,
-        reward_loss=metrics.reward_loss(rewards_arr, world.success_reward),
-        time_to_threshold=metrics.time_to_threshold(steps, rewards_arr, spec.threshold),
+        reward_loss=math.nan if failure else metrics.reward_loss(rewards_arr, world.success_reward),
+        time_to_threshold=None if failure else metrics.time_to_threshold(steps, rewards_arr, spec.threshold),
         source_phase_end=source_phase_end,
         first_target_reward_step=first_target_reward,
         source_tasks_solved=strategy.solved_count,
@@ -218,6 +223,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         learner_stats=dict(learner.stats),
         code=code_version(spec.algorithm),
         results_format=RESULTS_FORMAT,
+        failure=failure,
     )
 
 

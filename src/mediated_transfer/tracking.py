@@ -183,7 +183,9 @@ class LiveRun:
         for k, v in _result_tags(result).items():
             self.client.set_tag(self.run_id, k, v)
         _log_artifacts(self.client, self.run_id, artifacts)
-        self.end("FINISHED")  # last: a run interrupted before this is recognised and redone
+        # Last: a run interrupted before this is recognised and redone. A run stopped as failed
+        # (its learner diverged) ends FAILED, its reason in the tag ``failure``.
+        self.end("FAILED" if result.failed else "FINISHED")
 
     def end(self, status: str) -> None:
         if self.run_id is not None:
@@ -223,6 +225,8 @@ def _result_tags(result: RunResult) -> dict[str, str]:
         tags["code_dirty"] = str(bool(result.code["dirty"])).lower()
     if result.time_to_threshold is None:
         tags["time_to_threshold"] = NEVER
+    if result.failed:
+        tags["failure"] = str(result.failure)[:5000]
     return tags
 
 
@@ -307,7 +311,10 @@ def _runs_with_key(client, experiment_id: str, key: str) -> list:
 
 def _existing(client, experiment_id: str, key: str) -> str | None:
     runs = _runs_with_key(client, experiment_id, key)
-    finished = [r.info.run_id for r in runs if r.info.status == "FINISHED"]
+    # Complete: FINISHED, or FAILED with its reason (a diverged run is an outcome, not an
+    # interruption); anything else was interrupted.
+    finished = [r.info.run_id for r in runs if r.info.status == "FINISHED"
+                or (r.info.status == "FAILED" and "failure" in r.data.tags)]
     for run in runs:
         if run.info.run_id not in finished[:1]:
             # Left unfinished by an interruption (or a duplicate): log it again cleanly.
@@ -327,8 +334,8 @@ def _create(client, experiment_id, key, run_name, metrics, params, tags, artifac
     for i in range(0, len(params_list), _BATCH["params"]):
         client.log_batch(run_id, params=params_list[i:i + _BATCH["params"]])
     _log_artifacts(client, run_id, artifacts)
-    # FINISHED last: a run interrupted before this line is recognised and redone.
-    client.set_terminated(run_id, "FINISHED")
+    # The status last: a run interrupted before this line is recognised and redone.
+    client.set_terminated(run_id, "FAILED" if "failure" in tags else "FINISHED")
     return run_id
 
 

@@ -35,6 +35,10 @@ class Learner(Protocol):
     def end_episode(self) -> None:
         """Close the episode (e.g. clear eligibility traces, advance a decay schedule)."""
 
+    def divergence(self) -> str | None:
+        """Why learning has diverged beyond recovery (the run is then stopped and recorded as
+        failed); None while it has not. Cheap: called at every evaluation point."""
+
     def state_dict(self) -> dict[str, Any]:
         """Everything needed to resume: numpy arrays, torch tensors and plain numbers only."""
 

@@ -384,6 +384,17 @@ class DQNLearner:
             self.target_network.flat.copy_(self.network.flat)
         self.target_syncs += 1
 
+    def divergence(self) -> str | None:
+        """Why the network has diverged (a non-finite loss, gradient or weight, from which Adam
+        cannot come back); None while it has not."""
+        if not math.isfinite(self.last_loss):
+            return f"the TD loss is {self.last_loss}"
+        if not math.isfinite(self.update.grad_norm):
+            return f"the gradient norm is {self.update.grad_norm}"
+        if not bool(torch.isfinite(self.network.flat).all()):
+            return "the network's weights are not finite"
+        return None
+
     def q_values(self, observation: np.ndarray) -> np.ndarray:
         """Q(s, .) of the online network (a copy)."""
         return self.greedy.q_values(observation).copy()

@@ -35,6 +35,9 @@ from .rng_state import restore_rng_state, rng_state_words
 LEARNING_RATE_DECAYS = ("boyan", "boyan_const", "const")
 
 
+_DIVERGENCE_MIN_UPDATES = 1000  # fewer: a few early rollbacks are no verdict
+
+
 @dataclass(frozen=True)
 class LinearQConfig:
     """Hyperparameters of linear Q(lambda). Defaults are PROVISIONAL (RLPy's tuned
@@ -56,6 +59,11 @@ class LinearQConfig:
     """boyan: Boyan decay / ||phi(s)||_1; boyan_const: without the L1 division; const: alpha_0."""
     trace_cutoff: float = 1e-4
     """Trace entries that decay to this or below are dropped (RLPy keeps them): short traces."""
+
+    max_rollback_share: float = 0.1
+    """Diverged: once over 1000 updates, a run whose share of rolled-back updates (an update
+    that made the weights non-finite) exceeds this is stopped and recorded as failed. Tuned
+    runs roll back none; alpha0=1e30 rolls back 86 %."""
 
     def __post_init__(self) -> None:
         def fail(key: str, allowed: str) -> None:
@@ -79,6 +87,8 @@ class LinearQConfig:
             fail("alpha_decay", "be one of " + ", ".join(LEARNING_RATE_DECAYS))
         if not 0.0 <= self.trace_cutoff < 1.0:
             fail("trace_cutoff", "lie in [0, 1)")
+        if not 0.0 < self.max_rollback_share <= 1.0:
+            fail("max_rollback_share", "lie in (0, 1]")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -279,6 +289,14 @@ class LinearQLearner:
             "episodes": float(self._episode),
             "learning_rate": self._rate,
         }
+
+    def divergence(self) -> str | None:
+        """Why the learner has diverged beyond what rollbacks absorb; None while it has not."""
+        attempts = self._updates + self._rollbacks
+        if attempts >= _DIVERGENCE_MIN_UPDATES and self._rollbacks > self.config.max_rollback_share * attempts:
+            return (f"{self._rollbacks} of {attempts} updates rolled back (non-finite weights), "
+                    f"above algorithm.max_rollback_share={self.config.max_rollback_share:g}")
+        return None
 
     # --- inspection ---------------------------------------------------------------------------
 

@@ -21,6 +21,7 @@ from omegaconf import DictConfig, OmegaConf
 from .. import tracking
 from ..metrics import MetricsConfig
 from .collect import CellRuns, collect_sweep, runs_per_variant, variant_label
+from .collect import summaries as cell_summaries
 from .compose import variant_of
 from .figures import Curve, cell_label, fastest_transfer, plot_curves
 from .paper import paper_rows
@@ -62,7 +63,7 @@ def build_report(cfg: DictConfig) -> Report:
     variant = variant_of(cfg)
     cells = finished_runs(cfg)
     metrics_cfg = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))
-    summaries = {name: c.summary(metrics_cfg) for name, c in cells.items()}
+    summaries = cell_summaries(cells, metrics_cfg)
     strategies = {name: (c.strategy, c.n_source) for name, c in cells.items()}
     stale = [f"{name} seed={r.seed}: {why}" for name, c in cells.items() for r in c.results
              if (why := r.stale()) is not None]
@@ -72,7 +73,9 @@ def build_report(cfg: DictConfig) -> Report:
         eval_points=int(cfg.scale.eval_points), eval_episodes=int(cfg.scale.eval_episodes),
         runs_per_row=int(cfg.scale.seeds), threshold=metrics_cfg.threshold,
         max_reward=metrics_cfg.max_reward, variant=variant, stale_runs=len(stale))
-    rows = table_rows(summaries, strategies, paper_rows(str(cfg.report.paper_table)), header.runs_per_row)
+    failed = {name: len(c.failed) for name, c in cells.items() if c.failed}
+    rows = table_rows(summaries, strategies, paper_rows(str(cfg.report.paper_table)), header.runs_per_row,
+                      failed)
     out_dir = reports_dir(cfg, variant)
     tables = write_tables(rows, header, out_dir, str(cfg.name))
 
@@ -144,12 +147,15 @@ def _log_summaries(cfg: DictConfig, variant: str, cells, summaries, artifacts: l
     for name in sorted(cells):
         for r in cells[name].results:
             digest.update(f"{name}/{r.seed}:{r.reward_loss!r}:{r.mean_reward!r};".encode())
+        for r in cells[name].failed:
+            digest.update(f"{name}/{r.seed}:failed;".encode())
     fingerprint = digest.hexdigest()[:32]
     ids = []
-    for name, cell in cells.items():
+    for name in summaries:  # a cell whose every run failed has no summary to log
+        cell = cells[name]
         tags = {"table": str(cfg.name), "cell": name, "sweep": sweep, "scale": str(cfg.scale.name),
                 "variant": label, "strategy": cell.strategy, "n_source": str(cell.n_source),
-                "seeds": ",".join(str(s) for s in cell.seeds)}
+                "seeds": ",".join(str(s) for s in cell.seeds), "failed_runs": str(len(cell.failed))}
         # The baseline keeps the key it always had, so its existing summaries are updated in place.
         key = f"summary/{sweep}/{name}" + (f"/{variant}" if variant else "")
         ids.append(tracking.log_summary(

@@ -32,6 +32,9 @@ class CellRuns:
     strategy: str
     n_source: int
     results: list[RunResult] = field(default_factory=list)
+    """The runs that ran their budget: the cell's statistics are theirs."""
+    failed: list[RunResult] = field(default_factory=list)
+    """Runs stopped as failed (a diverged learner): counted and named, not averaged."""
 
     @property
     def cell(self) -> str:
@@ -42,9 +45,15 @@ class CellRuns:
         return sorted(r.seed for r in self.results)
 
     def summary(self, config: MetricsConfig) -> dict:
-        """metrics.summarise_runs of the cell's curves (mean and SEM curves, L_R, time to threshold)."""
+        """metrics.summarise_runs of the cell's curves (mean and SEM curves, L_R, time to
+        threshold) over the runs that ran their budget (there must be one)."""
         steps = self.results[0].steps
         return summarise_runs(np.array([r.mean_reward for r in self.results]), steps, config)
+
+
+def summaries(cells: dict[str, CellRuns], config: MetricsConfig) -> dict[str, dict]:
+    """The summary of every cell that has a run which ran its budget."""
+    return {name: c.summary(config) for name, c in cells.items() if c.results}
 
 
 def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
@@ -69,7 +78,7 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             if wanted is not None and getattr(result, key) != wanted:
                 raise ValueError(f"{folder}: {key}={getattr(result, key)!r}, but this table expects "
                                  f"{key}={wanted!r}; the folder belongs to another sweep")
-        if eval_points is not None and len(result.steps) != eval_points:
+        if eval_points is not None and len(result.steps) != eval_points and not result.failed:
             raise ValueError(f"{folder}: {len(result.steps)} evaluation points, but this table "
                              f"expects eval_points={eval_points}; the folder belongs to another sweep")
         cell_name = f"{result.strategy}_{result.n_source}"
@@ -77,12 +86,16 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             raise ValueError(f"{folder} holds the run {cell_name} seed={result.seed}: "
                              "the folder does not match its content")
         cell = cells.setdefault(cell_name, CellRuns(result.strategy, result.n_source))
+        if result.failed:  # its curve stops where the run was stopped
+            cell.failed.append(result)
+            continue
         if cell.results and cell.results[0].steps != result.steps:
             raise ValueError(f"{folder}: evaluation steps differ from the other runs of {cell_name} "
                              f"({result.steps[:3]}... vs {cell.results[0].steps[:3]}...)")
         cell.results.append(result)
     for cell in cells.values():
         cell.results.sort(key=lambda r: r.seed)
+        cell.failed.sort(key=lambda r: r.seed)
     return cells
 
 

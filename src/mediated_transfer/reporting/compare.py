@@ -22,6 +22,7 @@ from omegaconf import DictConfig
 
 from ..metrics import MetricsConfig
 from .build import finished_runs, path_name
+from .collect import summaries as cell_summaries
 from .collect import variant_label
 from .comparison import Sweep, compared_cells, numbers, preamble, reward_loss_bars, shown
 from .compose import (USER_ERRORS, ReportError, compose_experiment, experiment_names, one_line,
@@ -89,7 +90,7 @@ def _overrides(variant: str) -> list[str]:
 def _sweep(cfg: DictConfig) -> Sweep:
     cells = finished_runs(cfg)
     metrics = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))
-    return Sweep(variant_of(cfg), {name: c.summary(metrics) for name, c in cells.items()},
+    return Sweep(variant_of(cfg), cell_summaries(cells, metrics),
                  {name: (c.strategy, c.n_source) for name, c in cells.items()}, int(cfg.scale.seeds),
                  int(cfg.scale.budget), int(cfg.scale.eval_points))
 

@@ -27,6 +27,8 @@ class TableRow:
     paper: PaperRow | None
     """The paper's row; None for a cell the paper does not have."""
     expected_runs: int
+    failed: int = 0
+    """Runs stopped as failed (a diverged learner): not in the summary, counted here."""
 
     @property
     def cell(self) -> str:
@@ -81,15 +83,20 @@ class TableHeader:
 
 
 def table_rows(summaries: dict[str, dict], strategies: dict[str, tuple[str, int]],
-               paper: list[PaperRow], expected_runs: int) -> list[TableRow]:
+               paper: list[PaperRow], expected_runs: int,
+               failed: dict[str, int] | None = None) -> list[TableRow]:
     """The paper's rows in its order, then any measured cell the paper does not have.
 
-    ``summaries``: cell -> summary; ``strategies``: cell -> (strategy, n_source) of measured cells.
+    ``summaries``: cell -> summary; ``strategies``: cell -> (strategy, n_source) of measured
+    cells; ``failed``: cell -> runs stopped as failed.
     """
-    rows = [TableRow(p.strategy, p.n_source, summaries.get(p.cell), p, expected_runs) for p in paper]
+    failed = failed or {}
+    rows = [TableRow(p.strategy, p.n_source, summaries.get(p.cell), p, expected_runs, failed.get(p.cell, 0))
+            for p in paper]
     known = {p.cell for p in paper}
-    extra = sorted((c for c in summaries if c not in known), key=lambda c: strategies[c])
-    rows += [TableRow(*strategies[c], summaries[c], None, expected_runs) for c in extra]
+    extra = sorted((c for c in strategies if c not in known and (c in summaries or c in failed)),
+                   key=lambda c: strategies[c])
+    rows += [TableRow(*strategies[c], summaries.get(c), None, expected_runs, failed.get(c, 0)) for c in extra]
     return rows
 
 
@@ -116,7 +123,8 @@ def shown(rows: list[TableRow], m: Markup) -> pd.DataFrame:
 
 def _texts(row: TableRow, m: Markup) -> list[str]:
     s, p = row.summary, row.paper
-    measured = ["not run", "", ""] if s is None else [
+    nothing = "all failed" if row.failed else "not run"
+    measured = [nothing, "", ""] if s is None else [
         reward_loss_text(s["reward_loss_mean"], s["reward_loss_sem"], m),
         steps_text(s["time_to_threshold"]),
         f"{steps_text(s['time_to_threshold_median'])} ({s['runs_reaching_threshold']}/{s['n_runs']})",
@@ -125,7 +133,8 @@ def _texts(row: TableRow, m: Markup) -> list[str]:
         f"{p.reward_loss_mean:g} {m.pm} {p.reward_loss_sem:.2f}",
         "-" if p.time_to_threshold is None else f"{m.approx}{p.time_to_threshold:,}",
     ]
-    return [SCHEMES[row.strategy], str(row.n_source), f"{row.n_runs}/{row.expected_runs}",
+    runs = f"{row.n_runs}/{row.expected_runs}" + (f" ({row.failed} failed)" if row.failed else "")
+    return [SCHEMES[row.strategy], str(row.n_source), runs,
             *measured, *published]
 
 
@@ -138,7 +147,7 @@ def numbers(rows: list[TableRow], header: TableHeader) -> pd.DataFrame:
             "scheme": SCHEMES[r.strategy], "strategy": r.strategy, "n_source": r.n_source,
             "scale": header.scale, "variant": header.variant, "budget": header.budget,
             "eval_points": header.eval_points, "eval_episodes": header.eval_episodes,
-            "runs": r.n_runs, "expected_runs": r.expected_runs,
+            "runs": r.n_runs, "expected_runs": r.expected_runs, "failed_runs": r.failed,
             "reward_loss_mean": s.get("reward_loss_mean"), "reward_loss_sem": s.get("reward_loss_sem"),
             "time_to_threshold": s.get("time_to_threshold"),
             "time_to_threshold_median": s.get("time_to_threshold_median"),
