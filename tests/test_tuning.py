@@ -207,3 +207,17 @@ def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, 
     (folder / "refine" / "fsr.yaml").write_text("learner: fsr\nseeds: [3]\ncandidates: {}\n")
     with pytest.raises(SearchSpaceError, match="table seeds"):
         refine.load_refinement("fsr", folder, scale="smoke")
+
+
+def test_a_diverged_run_scores_zero_reward_for_the_rest_of_its_budget():
+    import re
+
+    from mediated_transfer.tuning.objective import run_seed
+
+    result, _ = run_seed(["algorithm=linear_q", "representation=fsr", "strategy=regular", "n_source=50",
+                          "algorithm.alpha0=1e30", "scale=smoke", "scale.budget=20000", "scale.eval_points=4",
+                          "tracking=none", "seed=1000"])
+    stopped = int(re.search(r"diverged by step (\d+)", result.failure).group(1))
+    assert stopped < 20000 and result.steps == [5000, 10000, 15000, 20000]
+    assert all(r == 0.0 for s, r in zip(result.steps, result.mean_reward) if s > stopped)
+    assert result.reward_loss == pytest.approx(sum(10.0 - r for r in result.mean_reward))

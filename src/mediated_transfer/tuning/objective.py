@@ -6,6 +6,10 @@ seed, the evaluation curve, L_R, the learning step of the first rewarded target-
 evaluation step with <R> >= threshold, and the span between the two (learning: how long it then
 took to learn the tool skill). Issue 9 found that transfer shortens discovery, not learning; the
 split shows which of the two a hyperparameter moves.
+
+A run stopped because its learner diverged (RunResult.failure) scores <R> = 0 at the evaluation
+points it did not reach: a diverged learner has no policy left, and the search should see the
+setting as the bad one it is, not lose the trial.
 """
 
 from __future__ import annotations
@@ -29,7 +33,24 @@ def run_seed(overrides: Sequence[str]) -> tuple[RunResult, float]:
     from ..config.compose import compose_config
 
     cfg = compose_config(overrides)
-    return execute_run(run_spec(cfg)), float(cfg.threshold)
+    spec = run_spec(cfg)
+    result = execute_run(spec)
+    return (_scored_to_the_end(result, spec.budget, spec.eval_points, float(cfg.env.success_reward))
+            if result.failed else result), float(cfg.threshold)
+
+
+def _scored_to_the_end(result: RunResult, budget: int, eval_points: int, max_reward: float) -> RunResult:
+    """A failed run's curve completed with <R> = 0 (and success 0) at the points it did not reach."""
+    from dataclasses import replace
+
+    from ..metrics import reward_loss
+
+    every = budget // eval_points
+    missing = [every * k for k in range(len(result.steps) + 1, eval_points + 1)]
+    rewards = list(result.mean_reward) + [0.0] * len(missing)
+    return replace(result, steps=list(result.steps) + missing, mean_reward=rewards,
+                   success_rate=list(result.success_rate) + [0.0] * len(missing),
+                   reward_loss=reward_loss(np.asarray(rewards), max_reward))
 
 
 def first_step_at_threshold(steps: Sequence[int], rewards: Sequence[float], threshold: float) -> int | None:
@@ -62,6 +83,7 @@ def trial_record(seeds: Sequence[int], results: Sequence[RunResult], threshold: 
         "time_to_threshold": [r.time_to_threshold for r in results],
         "final_reward": [float(r.mean_reward[-1]) for r in results],
         "wall_time_s": [float(r.wall_time_s) for r in results],
+        "failure": [r.failure for r in results],
         "threshold": threshold,
     }
 
