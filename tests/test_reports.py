@@ -336,3 +336,16 @@ def test_runs_of_other_code_are_reported_stale_with_how_to_recompute(tmp_path, c
     assert "regular_50 seed=1: computed by other code: commit ffffffffff" in err and "rerun_stale=true" in err
     md = (Path(cfg.paths.reports_dir) / "table2_rbf.md").read_text()
     assert "1 of the runs were computed by other code than the current" in md
+
+
+def test_runs_evaluated_on_other_episodes_than_the_scale_states_are_refused(tmp_path):
+    # Changing eval_episodes in a scale file must not relabel older runs in the table header.
+    cfg = compose_experiment(tmp_path, "tracking=none")
+    write_sweep(Path(cfg.paths.sweep_dir), {("none", 0): [[1.0, 2.0]]})
+    folder = Path(cfg.paths.sweep_dir) / "none_0" / "seed=0"
+    result = RunResult.read(folder)
+    result.config = {"scale": {"eval_episodes": int(cfg.scale.eval_episodes) + 3}}
+    result.write(folder)
+    with pytest.raises(ValueError, match=r"evaluated on \d+ episodes per point, but this table states "
+                                         r"scale.eval_episodes=\d+"):
+        build_report(cfg)

@@ -134,3 +134,15 @@ def test_precompute_checks_every_size_before_working(tmp_path, monkeypatch):
 def test_sensor_vectors_are_the_tasks_eq2_vectors():
     pool = sample_tasks("source", 5, np.random.default_rng(0), WORLD)
     np.testing.assert_array_equal(sensor_vectors(pool, WORLD), [t.sensor_vector(WORLD) for t in pool])
+
+
+def test_a_read_only_cache_does_not_stop_a_run_that_can_do_without_it(tmp_path, monkeypatch):
+    import errno
+
+    def read_only(path, write):  # what writing into a read-only cache folder raises
+        raise PermissionError(errno.EACCES, "Permission denied", str(path))
+
+    monkeypatch.setattr(source_tasks, "atomic_write", read_only)
+    tasks = source_tasks.source_task_set(5, pool_size=100, seed=3, cache_dir=tmp_path)
+    assert tasks == source_tasks.source_task_set(5, pool_size=100, seed=3)
+    assert not list(tmp_path.iterdir())

@@ -215,3 +215,20 @@ def test_two_sweeps_starting_together_on_a_new_store_both_prepare_it(tmp_path):
     assert len(set(ids)) == 2
     names = {e.name for e in tracking.TrackingSettings(uri).client().search_experiments()}
     assert {"table_a", "table_b"} <= names
+
+
+def test_a_run_interrupted_while_logged_from_its_files_is_not_left_running(settings, monkeypatch):
+    key = "multirun/t/quick/regular_15/seed=0@abc"
+    client_type = type(settings.client())
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(client_type, "log_artifact", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        _log(settings, synthetic_result(), key=key, artifacts=[Path(__file__)])
+    [run] = tracking.find_runs(settings, "table_x")
+    assert run.info.status == "KILLED"
+    monkeypatch.undo()
+    run_id = _log(settings, synthetic_result(), key=key)  # the rerun replaces it
+    assert [r.info.run_id for r in tracking.find_runs(settings, "table_x")] == [run_id]

@@ -329,11 +329,16 @@ def _create(client, experiment_id, key, run_name, metrics, params, tags, artifac
     run = client.create_run(experiment_id, run_name=run_name, tags=tags)
     run_id = run.info.run_id
     params_list = [Param(k, v) for k, v in params.items()]
-    for i in range(0, len(metrics), _BATCH["metrics"]):
-        client.log_batch(run_id, metrics=metrics[i:i + _BATCH["metrics"]])
-    for i in range(0, len(params_list), _BATCH["params"]):
-        client.log_batch(run_id, params=params_list[i:i + _BATCH["params"]])
-    _log_artifacts(client, run_id, artifacts)
+    try:
+        for i in range(0, len(metrics), _BATCH["metrics"]):
+            client.log_batch(run_id, metrics=metrics[i:i + _BATCH["metrics"]])
+        for i in range(0, len(params_list), _BATCH["params"]):
+            client.log_batch(run_id, params=params_list[i:i + _BATCH["params"]])
+        _log_artifacts(client, run_id, artifacts)
+    except BaseException as error:  # interrupted while logging: not left RUNNING; a rerun redoes it
+        client.set_terminated(run_id, "KILLED" if isinstance(error, (KeyboardInterrupt, SystemExit))
+                              else "FAILED")
+        raise
     # The status last: a run interrupted before this line is recognised and redone.
     client.set_terminated(run_id, "FAILED" if "failure" in tags else "FINISHED")
     return run_id

@@ -103,7 +103,7 @@ def finished_runs(cfg: DictConfig) -> dict[str, CellRuns]:
     variant = variant_of(cfg)
     sweep_dir = Path(cfg.paths.sweep_dir)
     cells = collect_sweep(sweep_dir, cfg.algorithm.name, cfg.representation.name, int(cfg.scale.budget),
-                          int(cfg.scale.eval_points), variant)
+                          int(cfg.scale.eval_points), variant, int(cfg.scale.eval_episodes))
     if cells:
         return cells
     present = runs_per_variant(sweep_dir)

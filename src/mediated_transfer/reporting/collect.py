@@ -58,13 +58,14 @@ def summaries(cells: dict[str, CellRuns], config: MetricsConfig) -> dict[str, di
 
 def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
                   representation: str | None = None, budget: int | None = None,
-                  eval_points: int | None = None, variant: str = BASELINE) -> dict[str, CellRuns]:
+                  eval_points: int | None = None, variant: str = BASELINE,
+                  eval_episodes: int | None = None) -> dict[str, CellRuns]:
     """The finished runs of ``variant`` under ``sweep_dir`` by cell name, runs sorted by seed.
 
-    With ``algorithm``/``representation``/``budget``/``eval_points`` given, a run of another
-    learner, budget or evaluation schedule in the folder is an error (it would silently mix into
-    the table, whose header states the schedule, otherwise); so is a run whose curve has other
-    evaluation steps than the rest of its cell.
+    With ``algorithm``/``representation``/``budget``/``eval_points``/``eval_episodes`` given, a
+    run of another learner, budget or evaluation schedule in the folder is an error (it would
+    silently mix into the table, whose header states the schedule, otherwise); so is a run whose
+    curve has other evaluation steps than the rest of its cell.
     """
     sweep_dir = Path(sweep_dir)
     cells: dict[str, CellRuns] = {}
@@ -78,6 +79,11 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             if wanted is not None and getattr(result, key) != wanted:
                 raise ValueError(f"{folder}: {key}={getattr(result, key)!r}, but this table expects "
                                  f"{key}={wanted!r}; the folder belongs to another sweep")
+        recorded = (result.config.get("scale") or {}).get("eval_episodes")  # older results: none
+        if eval_episodes is not None and recorded is not None and int(recorded) != eval_episodes:
+            raise ValueError(f"{folder}: evaluated on {recorded} episodes per point, but this table "
+                             f"states scale.eval_episodes={eval_episodes}; report with "
+                             f"scale.eval_episodes={recorded}, or rerun the sweep")
         if eval_points is not None and len(result.steps) != eval_points and not result.failed:
             raise ValueError(f"{folder}: {len(result.steps)} evaluation points, but this table "
                              f"expects eval_points={eval_points}; the folder belongs to another sweep")

@@ -200,7 +200,11 @@ def _select_and_store(pool, sensors, n_source, seed, clustering, path) -> list[T
     if path is not None:
         # Atomic: parallel workers may write the same set at once; a reader never sees half.
         coordinates = np.array([t.coordinates for t in tasks])
-        atomic_write(path, lambda handle: np.savez(handle, coordinates=coordinates, pool_indices=chosen))
+        try:
+            atomic_write(path, lambda handle: np.savez(handle, coordinates=coordinates, pool_indices=chosen))
+        except OSError as error:  # e.g. a read-only cache: the run needs the set, not the file
+            log.warning("source task set not cached (%s: %s); it is recomputed when needed",
+                        path.parent, error.strerror or error)
     return tasks
 
 
