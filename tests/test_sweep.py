@@ -397,3 +397,40 @@ def test_a_run_claimed_by_another_process_is_skipped_at_once(root, source_cache,
     assert "none_0 seed=0: being computed by another process, skipped" in capsys.readouterr().out
     assert not _results(root / "multirun" / "table2_rbf" / "smoke")
     assert not tracking.find_runs(_settings(root), "table2_rbf")
+
+
+def test_a_run_whose_launcher_is_killed_stops_instead_of_running_on_orphaned(root, source_cache):
+    """SIGKILL of the launching process: its run notices at the next evaluation point, stops
+    (MLflow: KILLED) and writes nothing, instead of computing on unseen."""
+    import signal
+    import subprocess
+    import time
+
+    command = " ".join([sys.executable, "-m", "mediated_transfer", "cell=none_0", "seed=0",
+                        *_common(root, source_cache), "scale.budget=4000000", "scale.eval_points=400"])
+    launcher = subprocess.Popen(["bash", "-c", f"{command} & echo $! && wait"], stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, text=True)
+    run_pid = int(launcher.stdout.readline())
+    try:
+        deadline = time.time() + 120
+        while not tracking.find_runs(_settings(root), "linear_q_rbf") and time.time() < deadline:
+            time.sleep(0.5)
+        launcher.send_signal(signal.SIGKILL)
+        launcher.wait()
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            try:
+                os.kill(run_pid, 0)
+            except ProcessLookupError:
+                break
+            time.sleep(0.2)
+        else:
+            pytest.fail("the orphaned run kept running")
+    finally:
+        try:
+            os.kill(run_pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    [run] = tracking.find_runs(_settings(root), "linear_q_rbf")
+    assert run.info.status == "KILLED"
+    assert not list(root.rglob("result.json"))

@@ -232,3 +232,18 @@ def test_a_run_interrupted_while_logged_from_its_files_is_not_left_running(setti
     monkeypatch.undo()
     run_id = _log(settings, synthetic_result(), key=key)  # the rerun replaces it
     assert [r.info.run_id for r in tracking.find_runs(settings, "table_x")] == [run_id]
+
+
+def test_a_store_failing_during_a_run_stops_following_it_but_not_the_run(settings, monkeypatch):
+    live = _live(settings)
+    live.evaluation(100, 1.0, 0.1)
+    client_type = type(live.client)
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(client_type, "log_batch", broken)
+    with pytest.warns(RuntimeWarning, match="MLflow stopped following this run.*disk full"):
+        live.evaluation(200, 2.0, 0.2)
+    live.evaluation(300, 3.0, 0.3)  # silently nothing: following has stopped
+    live.finish(synthetic_result())

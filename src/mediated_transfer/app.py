@@ -95,15 +95,23 @@ def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, var
     live = None
     if cfg.tracking.enabled:
         tags = run_tags(cfg, folder, spec, variant, code_version(spec.algorithm)["digest"])
-        live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
-                                run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
-                                tags=tags)
+        try:
+            live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                                    run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
+                                    tags=tags)
+        except Exception as error:  # noqa: BLE001 - the store failed after the sweep's check
+            log.warning("%s: not followed in MLflow (%s: %s); rerunning the sweep logs it",
+                        folder, type(error).__name__, first_line(error))
+    parent = os.getppid()
 
     def evaluated(step: int, mean_reward: float, success_rate: float) -> None:
         if watch is not None:
             watch.evaluated(step, mean_reward, success_rate)
         if live is not None:
             live.evaluation(step, mean_reward, success_rate)
+        if os.getppid() != parent:
+            # The launcher died (e.g. SIGKILL): nobody collects this run; a rerun redoes it.
+            raise KeyboardInterrupt("the launching process is gone")
 
     try:
         with _interrupt_on_sigterm():

@@ -29,6 +29,7 @@ import hashlib
 import math
 import os
 import time
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -167,29 +168,40 @@ class LiveRun:
     def evaluation(self, step: int, mean_reward: float, success_rate: float) -> None:
         from mlflow.entities import Metric
 
-        if self.run_id is None:
-            return
         now = _now_ms()
-        self.client.log_batch(self.run_id, metrics=[
+        self._safely(lambda run_id: self.client.log_batch(run_id, metrics=[
             Metric("mean_reward", float(mean_reward), now, int(step)),
-            Metric("success_rate", float(success_rate), now, int(step))])
+            Metric("success_rate", float(success_rate), now, int(step))]))
 
     def finish(self, result: RunResult, artifacts: Iterable[Path] = ()) -> None:
-        if self.run_id is None:
-            return
-        metrics = _result_metrics(result, timestamp=_now_ms())
-        for i in range(0, len(metrics), _BATCH["metrics"]):
-            self.client.log_batch(self.run_id, metrics=metrics[i:i + _BATCH["metrics"]])
-        for k, v in _result_tags(result).items():
-            self.client.set_tag(self.run_id, k, v)
-        _log_artifacts(self.client, self.run_id, artifacts)
+        def log(run_id: str) -> None:
+            metrics = _result_metrics(result, timestamp=_now_ms())
+            for i in range(0, len(metrics), _BATCH["metrics"]):
+                self.client.log_batch(run_id, metrics=metrics[i:i + _BATCH["metrics"]])
+            for k, v in _result_tags(result).items():
+                self.client.set_tag(run_id, k, v)
+            _log_artifacts(self.client, run_id, artifacts)
+
+        self._safely(log)
         # Last: a run interrupted before this is recognised and redone. A run stopped as failed
         # (its learner diverged) ends FAILED, its reason in the tag ``failure``.
         self.end("FAILED" if result.failed else "FINISHED")
 
     def end(self, status: str) -> None:
-        if self.run_id is not None:
-            self.client.set_terminated(self.run_id, status, end_time=_now_ms())
+        self._safely(lambda run_id: self.client.set_terminated(run_id, status, end_time=_now_ms()))
+        self.run_id = None
+
+    def _safely(self, log) -> None:
+        """Tracking must never cost a run: if the store fails, following stops (one warning)
+        and the run goes on; its result file is written, and rerunning the sweep logs it."""
+        if self.run_id is None:
+            return
+        try:
+            log(self.run_id)
+        except Exception as error:  # noqa: BLE001 - any store or network error
+            warnings.warn(f"MLflow stopped following this run ({type(error).__name__}: "
+                          f"{str(error).splitlines()[0] if str(error) else ''}); its result is kept, "
+                          "and rerunning the sweep logs it", RuntimeWarning, stacklevel=2)
             self.run_id = None
 
 
