@@ -14,6 +14,9 @@ from dataclasses import asdict, dataclass, fields
 
 MAX_SUBSTEPS = 1000
 """Most physics substeps per environment step: 100x the default's cost per step already."""
+MAX_SCALE = 1e6
+"""Lengths, masses, times and speeds lie within [1/MAX_SCALE, MAX_SCALE]: the defaults are near
+1, and pymunk's float64 contacts overflow to non-finite positions with masses of 1e308."""
 MAX_REWARD = 1e6
 """Largest success reward (the paper: 10); sums of larger ones may overflow to inf."""
 MAX_WALL_SEGMENTS = 10_000
@@ -87,6 +90,10 @@ class WorldConfig:
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"env.{name} must be > 0, got {getattr(self, name)!r}")
+        for f in fields(self):
+            if f.type == "float" and f.name in positive and not 1 / MAX_SCALE <= getattr(self, f.name) <= MAX_SCALE:
+                raise ValueError(f"env.{f.name} must lie in [{1 / MAX_SCALE:g}, {MAX_SCALE:g}] (beyond, "
+                                 f"the physics overflows or stalls), got {getattr(self, f.name)!r}")
         if not 0.0 <= self.action_noise <= 1.0:
             raise ValueError(f"env.action_noise must lie in [0, 1], got {self.action_noise!r}")
         if not 3 <= self.wall_segments <= MAX_WALL_SEGMENTS:
