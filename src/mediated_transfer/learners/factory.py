@@ -69,7 +69,10 @@ def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
     """Estimated bytes of a learner's largest arrays (from the configs alone, nothing allocated)."""
     if algorithm == "dqn":
         c = algo_config
-        params = sum(out * (inp + 1) for out, inp in layer_shapes(c.hidden_size, c.num_hidden_layers, NUM_ACTIONS))
+        # layer_shapes' first, one repeated and last layer: a list of 10^12 layers would not fit.
+        first, *rest = layer_shapes(c.hidden_size, 1, NUM_ACTIONS)
+        params = first[0] * (first[1] + 1) + (c.num_hidden_layers - 1) * c.hidden_size * (c.hidden_size + 1)
+        params += rest[-1][0] * (rest[-1][1] + 1)
         # float32: the replay buffer and its batch; weights, target weights, gradient and
         # Adam's two moments; the batch's activations (forward and backward).
         rows = (c.buffer_size + c.batch_size) * ReplayBuffer.WIDTH
