@@ -130,11 +130,13 @@ class RunSpec:
     def _check_threshold(self) -> None:
         # <R> is a mean of episode rewards in {0, success_reward}: a threshold outside
         # (0, success_reward] (or nan) would be "reached" at the first point or never.
+        # A threshold within the metric's round-off tolerance of 0 is reached by a zero curve.
         threshold, best = self.threshold, self.world.success_reward
+        low = metrics.MetricsConfig().tolerance
         if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) \
-                or not 0 < threshold <= best:
+                or not low < threshold <= best:
             raise ValueError(
-                f"threshold must be a number in (0, env.success_reward={best:g}], got {threshold!r}"
+                f"threshold must be a number in ({low:g}, env.success_reward={best:g}], got {threshold!r}"
             )
 
     def _check_work(self) -> None:
