@@ -22,9 +22,10 @@ from . import metrics
 from .config.mapping import config_from_mapping
 from .env import WorldConfig, sample_tasks
 from .env.mediated_env import MediatedInteractionEnv
+from .env.task import check_room
 from .learners.base import Learner
 from .provenance import RESULTS_FORMAT, code_version
-from .learners.factory import make_learner, validate_learner_choice
+from .learners.factory import check_memory, make_learner, validate_learner_choice
 from .results import RunResult
 from .transfer.source_tasks import sensor_vectors, source_task_set
 from .transfer.strategies import STRATEGIES, make_strategy
@@ -32,6 +33,14 @@ from .transfer.strategies import STRATEGIES, make_strategy
 # Independent random streams of one run, all derived from its seed (never the seed itself:
 # default_rng(seed) is also the source pool's stream when seed == source_set_seed).
 _ENV_STREAM, _STRATEGY_STREAM, _EVAL_TASK_STREAM, _EVAL_NOISE_STREAM, _LEARNER_STREAM = 1, 2, 3, 4, 5
+
+
+MAX_STEPS = 10**9
+"""Most learning steps, and most evaluation steps, of one run: the paper's runs take 500k and
+12.5M; 10^9 is more than a day at this project's speeds. A larger value is refused, not run."""
+MAX_SOURCE_POOL = 10**6
+"""Most random source tasks clustered into C (the paper: 10^4); sampling and k-means on a
+larger pool would take hours in the launcher before any run starts."""
 
 
 def _stream_seed(seed: int, stream: int) -> int:
@@ -71,15 +80,28 @@ class RunSpec:
 
     def validate(self) -> "RunSpec":
         """Raise a clear error for bad input before any work starts."""
-        validate_learner_choice(
+        algo_config, rep_config = validate_learner_choice(
             self.algorithm, self.representation, self.algorithm_params, self.representation_params
         )
         if self.strategy not in STRATEGIES:
             raise ValueError(f"strategy={self.strategy!r} is unknown; allowed: {', '.join(STRATEGIES)}")
-        if self.seed < 0:
-            raise ValueError(f"seed must be >= 0, got {self.seed}")
-        if self.n_source < 0:
-            raise ValueError(f"n_source must be >= 0, got {self.n_source}")
+        # Values from Python or a recorded result.json are not typed by Hydra: check them here.
+        for key in ("seed", "n_source", "budget", "eval_points", "eval_episodes",
+                    "source_pool_size", "source_set_seed"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise ValueError(f"{key} must be an integer, got {value!r}")
+        for key in ("seed", "n_source", "source_set_seed"):
+            if getattr(self, key) < 0:
+                raise ValueError(f"{key} must be >= 0, got {getattr(self, key)}")
+        self._check_threshold()
+        if self.source_pool_size < 1:
+            raise ValueError(f"source_pool_size must be >= 1, got {self.source_pool_size}")
+        if self.source_pool_size > MAX_SOURCE_POOL:
+            raise ValueError(
+                f"source_pool_size={self.source_pool_size} exceeds {MAX_SOURCE_POOL:,}: sampling "
+                "and clustering a larger pool would take hours before the first learning step"
+            )
         if self.n_source > self.source_pool_size:
             raise ValueError(
                 f"n_source={self.n_source} exceeds source_pool_size={self.source_pool_size}: "
@@ -98,7 +120,41 @@ class RunSpec:
                 f"budget={self.budget} is not divisible into eval_points={self.eval_points} "
                 "evenly spaced evaluation points"
             )
+        self._check_work()
+        # Sizes that leave no room for a task would make task sampling loop (almost) forever.
+        for scenario in ("target", "source") if self.n_source else ("target",):
+            check_room(scenario, self.world)
+        check_memory(self.algorithm, algo_config, rep_config)
         return self
+
+    def _check_threshold(self) -> None:
+        # <R> is a mean of episode rewards in {0, success_reward}: a threshold outside
+        # (0, success_reward] (or nan) would be "reached" at the first point or never.
+        # A threshold within the metric's round-off tolerance of 0 is reached by a zero curve.
+        threshold, best = self.threshold, self.world.success_reward
+        low = metrics.MetricsConfig().tolerance
+        if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) \
+                or not low < threshold <= best:
+            raise ValueError(
+                f"threshold must be a number in ({low:g}, env.success_reward={best:g}], got {threshold!r}"
+            )
+
+    def _check_work(self) -> None:
+        # A run far beyond any study's size would look like a hang: refuse it with its size.
+        if self.budget > MAX_STEPS:
+            raise ValueError(
+                f"budget={self.budget} exceeds {MAX_STEPS:,} learning steps (more than a day "
+                "per run at this project's ~10^4 steps/s); split the study or raise run.MAX_STEPS"
+            )
+        # Evaluation may run every episode to its truncation: eval_points x eval_episodes x
+        # max_episode_steps greedy steps.
+        worst = self.eval_points * self.eval_episodes * self.world.max_episode_steps
+        if worst > MAX_STEPS:
+            raise ValueError(
+                f"eval_points={self.eval_points} x eval_episodes={self.eval_episodes} x "
+                f"env.max_episode_steps={self.world.max_episode_steps} = {worst} evaluation steps "
+                f"exceeds {MAX_STEPS:,} (more than a day per run)"
+            )
 
     def describe(self) -> str:
         return (f"{self.algorithm}/{self.representation} {self.strategy} "

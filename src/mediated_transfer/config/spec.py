@@ -48,11 +48,32 @@ def run_spec(cfg: Mapping[str, Any]) -> "RunSpec":
     from ..run import spec_from_dict
 
     try:
+        _check_launch_keys(cfg)
         return spec_from_dict(spec_values(cfg)).validate()
     except (ValueError, TypeError, KeyError) as error:
         # str() of a KeyError is its quoted key; other messages may end in a quoted value.
         message = error.args[0] if isinstance(error, KeyError) and error.args else error
         raise ConfigError(str(message)) from None
+
+
+MAX_THREADS = 1024
+"""Most CPU threads per run (torch and BLAS refuse absurd counts, mid-run)."""
+MAX_SEEDS = 10_000
+"""Most seeds per table cell: a sweep lists every job before it starts."""
+
+
+def _check_launch_keys(cfg: Mapping[str, Any]) -> None:
+    # Keys a run uses outside its RunSpec: how many threads it may use, how many seeds a sweep
+    # of an experiment has. A recorded result's config may lack them.
+    bounds = {"threads_per_run": MAX_THREADS, "scale.seeds": MAX_SEEDS}
+    for key, most in bounds.items():
+        node, _, name = key.rpartition(".")
+        section = cfg[node] if node else cfg
+        if name not in section:
+            continue
+        value = section[name]
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= most:
+            raise ValueError(f"{key} must be an integer in [1, {most}], got {value!r}")
 
 
 def comparable(spec: "RunSpec") -> dict[str, Any]:

@@ -12,6 +12,17 @@ import math
 from dataclasses import asdict, dataclass, fields
 
 
+MAX_SUBSTEPS = 1000
+"""Most physics substeps per environment step: 100x the default's cost per step already."""
+MAX_SCALE = 1e6
+"""Lengths, masses, times and speeds lie within [1/MAX_SCALE, MAX_SCALE]: the defaults are near
+1, and pymunk's float64 contacts overflow to non-finite positions with masses of 1e308."""
+MAX_REWARD = 1e6
+"""Largest success reward (the paper: 10); sums of larger ones may overflow to inf."""
+MAX_WALL_SEGMENTS = 10_000
+"""Most wall segments: a finer polygon than this changes nothing but the cost of collisions."""
+
+
 @dataclass(frozen=True)
 class WorldConfig:
     # --- fixed by the paper -------------------------------------------------------------
@@ -66,25 +77,54 @@ class WorldConfig:
     would; while everything rests, steps that drive nothing skip the physics."""
 
     def __post_init__(self) -> None:
+        # Python callers and mappings are not typed by Hydra: a number where a number belongs,
+        # finite (inf or nan lengths would reach the physics as nan positions).
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.type == "int" and (isinstance(value, bool) or not isinstance(value, int)):
+                raise ValueError(f"env.{f.name} must be an integer, got {value!r}")
+            if f.type == "float" and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                      or not math.isfinite(value)):
+                raise ValueError(f"env.{f.name} must be a finite number, got {value!r}")
         positive = [f.name for f in fields(self) if f.name not in ("action_noise", "damping")]
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"env.{name} must be > 0, got {getattr(self, name)!r}")
+        for f in fields(self):
+            if f.type == "float" and f.name in positive and not 1 / MAX_SCALE <= getattr(self, f.name) <= MAX_SCALE:
+                raise ValueError(f"env.{f.name} must lie in [{1 / MAX_SCALE:g}, {MAX_SCALE:g}] (beyond, "
+                                 f"the physics overflows or stalls), got {getattr(self, f.name)!r}")
         if not 0.0 <= self.action_noise <= 1.0:
             raise ValueError(f"env.action_noise must lie in [0, 1], got {self.action_noise!r}")
-        if not self.wall_segments >= 3:
-            raise ValueError(f"env.wall_segments must be >= 3, got {self.wall_segments!r}")
+        if not 3 <= self.wall_segments <= MAX_WALL_SEGMENTS:
+            raise ValueError(f"env.wall_segments must lie in [3, {MAX_WALL_SEGMENTS}], got {self.wall_segments!r}")
+        if not self.substeps <= MAX_SUBSTEPS:
+            raise ValueError(f"env.substeps must lie in [1, {MAX_SUBSTEPS}] (each is a physics step "
+                             f"of every environment step), got {self.substeps!r}")
+        if not self.rotation_angle <= math.pi:
+            raise ValueError(f"env.rotation_angle must lie in (0, pi], got {self.rotation_angle!r}")
         if not 0.0 < self.damping <= 1.0:
             raise ValueError(f"env.damping must lie in (0, 1], got {self.damping!r}")
+        if not self.success_reward <= MAX_REWARD:
+            raise ValueError(f"env.success_reward must lie in (0, {MAX_REWARD:g}] (reward losses "
+                             f"sum it over evaluation points), got {self.success_reward!r}")
         if not self.goal_radius < self.interaction_radius:
-            raise ValueError("env.goal_radius must be smaller than env.interaction_radius")
+            raise ValueError(
+                f"env.goal_radius={self.goal_radius!r} must be smaller than "
+                f"env.interaction_radius={self.interaction_radius!r}"
+            )
         if not self.interaction_radius < self.mediated_min_distance <= self.mediated_max_distance:
             raise ValueError(
-                "env.mediated_min_distance must exceed env.interaction_radius and not exceed "
-                "env.mediated_max_distance"
+                f"env.mediated_min_distance={self.mediated_min_distance!r} must exceed "
+                f"env.interaction_radius={self.interaction_radius!r} and not exceed "
+                f"env.mediated_max_distance={self.mediated_max_distance!r}"
             )
         if not self.mediated_max_distance + self.target_radius < self.world_radius:
-            raise ValueError("env.world_radius must enclose the mediated annulus plus the target")
+            raise ValueError(
+                f"env.world_radius={self.world_radius!r} must exceed env.mediated_max_distance + "
+                f"env.target_radius = {self.mediated_max_distance!r} + {self.target_radius!r}: "
+                "the wall must enclose the targets of target tasks"
+            )
 
     @property
     def max_target_distance(self) -> float:

@@ -195,6 +195,8 @@ class MediatedInteractionEnv(gymnasium.Env):
         if not self._running:
             raise RuntimeError("the episode is over (or never started): call reset() first")
         try:
+            if isinstance(action, (bool, np.bool_)):  # an index, not a truth value
+                raise TypeError
             a = operator.index(action)
         except TypeError:
             raise ValueError(
@@ -399,7 +401,7 @@ def _task_from_options(options, config: WorldConfig) -> Task | None:
             f"reset options must be None or a dict with keys {RESET_OPTIONS}, "
             f"got {type(options).__name__}"
         )
-    unknown = sorted(map(str, set(options) - set(RESET_OPTIONS)))
+    unknown = sorted(map(repr, set(options) - set(RESET_OPTIONS)))  # repr: one line, quoted
     if unknown:
         raise ValueError(
             f"unknown reset option(s) {', '.join(unknown)}; allowed: {', '.join(RESET_OPTIONS)}"
@@ -410,7 +412,7 @@ def _task_from_options(options, config: WorldConfig) -> Task | None:
     if not isinstance(task, Task):
         try:
             task = Task.from_coordinates(task)
-        except (TypeError, ValueError) as error:
+        except (TypeError, ValueError, OverflowError) as error:  # OverflowError: float(10**400)
             raise ValueError(
                 "reset option 'task' must be a Task or its 5 task-space coordinates "
                 f"(target x, y, tool corner x, y, tool angle): {error}"

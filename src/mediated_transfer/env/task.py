@@ -7,6 +7,7 @@ the origin O.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -136,15 +137,69 @@ def _uniform_in_annulus(rng: np.random.Generator, r_min: float, r_max: float) ->
     return (r * math.cos(phi), r * math.sin(phi))
 
 
-def _sample_tool_in_range(rng: np.random.Generator, config: WorldConfig):
+MAX_DRAWS = 1_000_000
+"""Random candidates ``sample_task`` draws before it gives up: sizes that leave no room for a
+task (a tool longer than the range) would otherwise loop forever. RunSpec.validate refuses
+such sizes before a run (``sampling_rate``); valid worlds keep a candidate in a few draws."""
+
+
+def _sample_tool_in_range(rng: np.random.Generator, config: WorldConfig, draws: list[int]):
     # Uniform corner in the range and uniform angle, kept when all three picking locations
     # are reachable (so the whole tool, a convex hull of them, lies inside the range).
     while True:
+        _count_draw(draws, config)
         position = _uniform_in_annulus(rng, 0.0, config.interaction_radius)
         angle = float(rng.uniform(-math.pi, math.pi))
-        points = _tool_points(position, angle, config)
-        if all(math.hypot(*p) <= config.interaction_radius for p in points):
+        if _tool_in_range(position, angle, config):
             return position, angle
+
+
+def _tool_in_range(position, angle: float, config: WorldConfig) -> bool:
+    points = _tool_points(position, angle, config)
+    return all(math.hypot(*p) <= config.interaction_radius for p in points)
+
+
+def _count_draw(draws: list[int], config: WorldConfig) -> None:
+    draws[0] += 1
+    if draws[0] > MAX_DRAWS:
+        raise ValueError(f"no valid task in {MAX_DRAWS} random draws: {_sizes(config)} leave no room for one")
+
+
+def _sizes(config: WorldConfig) -> str:
+    keys = ("interaction_radius", "goal_radius", "target_radius", "tool_handle_length",
+            "tool_hook_length", "tool_width", "mediated_min_distance", "mediated_max_distance",
+            "world_radius")
+    return ", ".join(f"env.{k}={getattr(config, k)!r}" for k in keys)
+
+
+@functools.lru_cache(maxsize=64)  # validation asks again for the same world
+def sampling_rate(scenario: str, config: WorldConfig, draws: int = 2000) -> float:
+    """Fraction of random candidates (target, tool) that ``sample_task`` would keep, from a
+    fixed generator: how much room the world's sizes leave for a task of ``scenario``."""
+    rng = np.random.default_rng(0)
+    kept = 0
+    for _ in range(draws):
+        target = _target_candidate(scenario, rng, config)
+        position = _uniform_in_annulus(rng, 0.0, config.interaction_radius)
+        angle = float(rng.uniform(-math.pi, math.pi))
+        kept += _tool_in_range(position, angle, config) and not Task(target, position, angle).problems(config)
+    return kept / draws
+
+
+def check_room(scenario: str, config: WorldConfig, min_rate: float = 0.01) -> None:
+    """ValueError naming the sizes if under ``min_rate`` of random candidates make a valid task
+    (sampling would take 1/rate draws per task, and never end when no task fits)."""
+    rate = sampling_rate(scenario, config)
+    if rate < min_rate:
+        raise ValueError(f"{_sizes(config)} leave room for {scenario} tasks in {rate:.2%} of random "
+                         f"placements (at least {min_rate:.0%} needed): change these sizes")
+
+
+def _target_candidate(scenario: str, rng: np.random.Generator, config: WorldConfig):
+    if scenario == "source":
+        # Keep the whole target disc inside the range and out of the goal area.
+        return _uniform_in_annulus(rng, config.goal_radius, config.interaction_radius - config.target_radius)
+    return _uniform_in_annulus(rng, config.mediated_min_distance, config.mediated_max_distance)
 
 
 def sample_task(scenario: str, rng: np.random.Generator, config: WorldConfig = WorldConfig()) -> Task:
@@ -157,17 +212,11 @@ def sample_task(scenario: str, rng: np.random.Generator, config: WorldConfig = W
     """
     if scenario not in SCENARIOS:
         raise ValueError(f"unknown scenario {scenario!r}; allowed: {', '.join(SCENARIOS)}")
+    draws = [0]
     while True:
-        if scenario == "source":
-            # Keep the whole target disc inside the range and out of the goal area.
-            target = _uniform_in_annulus(
-                rng, config.goal_radius, config.interaction_radius - config.target_radius
-            )
-        else:
-            target = _uniform_in_annulus(
-                rng, config.mediated_min_distance, config.mediated_max_distance
-            )
-        position, angle = _sample_tool_in_range(rng, config)
+        _count_draw(draws, config)
+        target = _target_candidate(scenario, rng, config)
+        position, angle = _sample_tool_in_range(rng, config, draws)
         task = Task(target, position, angle)
         if not task.problems(config):
             return task

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -37,6 +37,10 @@ KERNELS = ("fast", "reference")
 # --------------------------------------------------------------------------------------------
 # Config
 # --------------------------------------------------------------------------------------------
+MAX_TORCH_THREADS = 1024
+"""torch refuses absurd thread counts only when the learner is built; refuse them up front."""
+
+
 @dataclass(frozen=True)
 class DQNConfig:
     """Hyperparameters of the deep Q-learner.
@@ -91,6 +95,11 @@ class DQNConfig:
         def fail(key: str, allowed: str) -> None:
             raise ValueError(f"algorithm.{key} must be {allowed}, got {getattr(self, key)!r}")
 
+        for f in fields(self):  # values from Python are not typed by Hydra
+            value = getattr(self, f.name)
+            if f.type.startswith("float") and value is not None and (
+                    isinstance(value, bool) or not isinstance(value, (int, float))):
+                fail(f.name, "a number")
         for key in ("batch_size", "buffer_size", "train_frequency", "target_update_interval",
                     "hidden_size", "num_hidden_layers", "torch_threads"):
             value = getattr(self, key)
@@ -100,6 +109,8 @@ class DQNConfig:
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < 0:
                 fail(key, "an integer >= 0")
+        if self.torch_threads > MAX_TORCH_THREADS:
+            fail("torch_threads", f"at most {MAX_TORCH_THREADS}")
         if not 0.0 <= self.gamma < 1.0:
             fail("gamma", "in [0, 1)")
         if not (self.learning_rate > 0 and math.isfinite(self.learning_rate)):

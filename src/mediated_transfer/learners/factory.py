@@ -7,13 +7,14 @@ that name the allowed values.
 
 from __future__ import annotations
 
+import os
 from typing import Any, Mapping
 
 from ..config.mapping import config_from_mapping
 from ..env.config import WorldConfig
-from ..env.task import PICKING_LOCATIONS
+from ..env.task import NUM_DISTANCES, PICKING_LOCATIONS
 from .base import Learner
-from .dqn import DQNConfig, DQNLearner
+from .dqn import DQNConfig, DQNLearner, ReplayBuffer, layer_shapes
 from .fsr import FSRConfig, FSRRepresentation
 from .linear_q import LinearQConfig, LinearQLearner
 from .rbf import RBFConfig, RBFRepresentation
@@ -62,6 +63,59 @@ def validate_learner_choice(
     else:
         rep_config = build_config(rep_cls, representation_params or {}, "representation")
     return algo_config, rep_config
+
+
+def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
+    """Estimated bytes of a learner's largest arrays (from the configs alone, nothing allocated)."""
+    if algorithm == "dqn":
+        c = algo_config
+        # layer_shapes' first, one repeated and last layer: a list of 10^12 layers would not fit.
+        first, *rest = layer_shapes(c.hidden_size, 1, NUM_ACTIONS)
+        params = first[0] * (first[1] + 1) + (c.num_hidden_layers - 1) * c.hidden_size * (c.hidden_size + 1)
+        params += rest[-1][0] * (rest[-1][1] + 1)
+        # float32: the replay buffer and its batch; weights, target weights, gradient and
+        # Adam's two moments; the batch's activations (forward and backward).
+        rows = (c.buffer_size + c.batch_size) * ReplayBuffer.WIDTH
+        activations = 2 * c.batch_size * c.hidden_size * c.num_hidden_layers
+        return 4 * (rows + 5 * params + activations)
+    if isinstance(rep_config, RBFConfig):
+        r = rep_config
+        features = (r.tool_target_bins + 1) ** 3 * (r.tool_origin_bins + 1) ** 3
+        # float64 weights per action, and three (index, value) buffers of every feature (an
+        # RBF state may activate all of them).
+        return features * (8 * NUM_ACTIONS + 3 * 16)
+    features = NUM_DISTANCES * rep_config.distance_bins
+    return features * 8 * NUM_ACTIONS
+
+
+def check_memory(algorithm: str, algo_config, rep_config) -> None:
+    """ValueError naming the size key if the learner cannot fit in this machine's memory."""
+    needed = memory_bytes(algorithm, algo_config, rep_config)
+    total = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    if needed > total:
+        keys = {"dqn": "algorithm.buffer_size, algorithm.batch_size, algorithm.hidden_size, "
+                       "algorithm.num_hidden_layers",
+                "rbf": "representation.tool_target_bins, representation.tool_origin_bins",
+                "fsr": "representation.distance_bins"}
+        kind = "dqn" if algorithm == "dqn" else ("rbf" if isinstance(rep_config, RBFConfig) else "fsr")
+        raise ValueError(
+            f"the learner needs ~{_size(needed)} of memory, more than this machine's {_size(total)}: "
+            f"reduce {keys[kind]} ({_sizes(kind, algo_config, rep_config)})"
+        )
+
+
+def _sizes(kind: str, algo_config, rep_config) -> str:
+    config = algo_config if kind == "dqn" else rep_config
+    names = {"dqn": ("buffer_size", "batch_size", "hidden_size", "num_hidden_layers"),
+             "rbf": ("tool_target_bins", "tool_origin_bins"), "fsr": ("distance_bins",)}[kind]
+    return ", ".join(f"{name}={getattr(config, name)}" for name in names)
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "KB", "MB", "GB", "TB", "PB"):
+        if n < 1024 or unit == "PB":
+            return f"{n:.3g} {unit}"
+        n /= 1024
 
 
 def make_learner(

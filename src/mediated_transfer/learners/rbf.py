@@ -78,8 +78,9 @@ class RBFConfig:
             raise ValueError(f"representation.normalize must be true or false, got {self.normalize!r}")
         check_positive_int(self, "tool_target_bins")
         check_positive_int(self, "tool_origin_bins")
-        if not (math.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"representation.sigma must be > 0, got {self.sigma!r}")
+        # 1 / (2 sigma^2) must be a finite, non-zero float64.
+        if not 1e-6 <= self.sigma <= 1e6:
+            raise ValueError(f"representation.sigma must lie in [1e-06, 1e+06], got {self.sigma!r}")
         if not 0.0 <= self.cutoff < 1.0:
             raise ValueError(f"representation.cutoff must lie in [0, 1), got {self.cutoff!r}")
 
