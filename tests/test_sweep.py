@@ -434,3 +434,16 @@ def test_a_run_whose_launcher_is_killed_stops_instead_of_running_on_orphaned(roo
     [run] = tracking.find_runs(_settings(root), "linear_q_rbf")
     assert run.info.status == "KILLED"
     assert not list(root.rglob("result.json"))
+
+
+@pytest.mark.parametrize("sweep", [False, True])
+def test_an_unreachable_tracking_server_stops_the_command_at_once_in_one_line(tmp_path, sweep):
+    import time
+
+    start = time.perf_counter()
+    with pytest.raises(SystemExit) as error:
+        _run_cli(*(["-m", "experiment=table2_rbf", "cell=none_0", "hydra/launcher=basic"] if sweep else []),
+                 "scale=smoke", f"paths.root={tmp_path}", "tracking=server", "tracking.uri=http://127.0.0.1:9")
+    assert str(error.value).startswith("Could not prepare the runs: ") and "\n" not in str(error.value)
+    assert time.perf_counter() - start < 60  # MLflow's own retries would take minutes
+    assert not list(tmp_path.iterdir())

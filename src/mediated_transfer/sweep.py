@@ -52,6 +52,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
             swept = [o.input_line for o in parsed if o.is_sweep_override()]
             raise ConfigError(f"{' '.join(swept)} sweeps over values: add -m (--multirun)")
         run_spec(base)
+        _prepare_tracking(base)  # a store that cannot be reached stops the run now, in one line
         return None
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])

@@ -67,13 +67,34 @@ class TrackingSettings:
         return MlflowClient(tracking_uri=self.uri)
 
 
+CHECK_TIMEOUT_S = 10
+"""How long the check before a command's first run waits for a tracking server (no retries)."""
+
+
 def prepare(settings: TrackingSettings, experiment: str) -> str:
-    """Create the store (if new) and the experiment (if missing); returns its id. For a SQLite
+    """Create the store (if new) and the experiment (if missing); returns its id. Fails within
+    seconds when a server does not answer (MLflow would retry for minutes). For a SQLite
     store this holds a lock beside it: two sweeps starting together on a new store would
     otherwise both create its tables, and one would fail."""
-    with _store_lock(settings):
+    with _store_lock(settings), _impatient():
         client = settings.client()
         return _experiment_id(client, settings, experiment)
+
+
+@contextlib.contextmanager
+def _impatient():
+    """MLflow's HTTP client without retries and with a short timeout, for this block only."""
+    saved = {k: os.environ.get(k) for k in ("MLFLOW_HTTP_REQUEST_MAX_RETRIES", "MLFLOW_HTTP_REQUEST_TIMEOUT")}
+    os.environ["MLFLOW_HTTP_REQUEST_MAX_RETRIES"] = "0"
+    os.environ["MLFLOW_HTTP_REQUEST_TIMEOUT"] = str(CHECK_TIMEOUT_S)
+    try:
+        yield
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
 
 
 @contextlib.contextmanager
