@@ -310,3 +310,23 @@ def test_tuned_values_apply_to_their_learner_only_and_are_searched_keys(path):
     # Every value names where it comes from.
     text = path.read_text()
     assert all(f"{key.split('.')[1]}:" in text for key in values) and "refine" in text
+
+
+def test_a_run_made_before_a_key_existed_is_the_same_run_but_another_value_is_not(tmp_path):
+    from omegaconf import OmegaConf
+
+    from mediated_transfer.config.spec import check_same_run
+    from mediated_transfer.results import RunResult
+
+    cfg = compose_config(["experiment=table2_rbf", "cell=none_0", "seed=0"])
+    recorded = OmegaConf.to_container(cfg, resolve=True)
+    del recorded["algorithm"]["max_rollback_share"]  # a key added after the run was made
+    result = RunResult(algorithm="linear_q", representation="rbf", strategy="none", n_source=0, seed=0,
+                       budget=200, steps=[100, 200], mean_reward=[0.0, 0.0], success_rate=[0.0, 0.0],
+                       reward_loss=20.0, time_to_threshold=None, source_phase_end=None,
+                       source_tasks_solved=0, wall_time_s=1.0, learning_steps_per_s=200.0,
+                       learner_stats={}, config=recorded)
+    check_same_run(result, run_spec(cfg), tmp_path)  # no error
+    recorded["algorithm"]["max_rollback_share"] = 0.5
+    with pytest.raises(ConfigError, match="max_rollback_share: stored 0.5, now 0.1"):
+        check_same_run(result, run_spec(cfg), tmp_path)

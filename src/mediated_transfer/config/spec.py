@@ -102,6 +102,13 @@ def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
         raise ConfigError(f"{folder / 'result.json'} has no recorded config; delete the folder to rerun it")
     stored = comparable(run_spec(result.config))
     wanted = comparable(spec)
+    # A key added since the run was made is missing from its record: it ran with what the key's
+    # default keeps (a new key's default keeps the old behaviour), not with another value. Its
+    # code digest differs anyway, so the run shows as stale (rerun_stale=true recomputes it).
+    for group in ("algorithm_params", "representation_params", "world"):
+        if isinstance(stored.get(group), dict) and isinstance(wanted.get(group), dict):
+            stored[group] = {**{k: v for k, v in wanted[group].items() if k not in stored[group]},
+                             **stored[group]}
     differ = sorted(k for k in wanted if stored.get(k) != wanted[k])
     if differ:
         detail = "; ".join(_difference(k, stored.get(k), wanted[k]) for k in differ)
