@@ -221,3 +221,14 @@ def test_a_diverged_run_scores_zero_reward_for_the_rest_of_its_budget():
     assert stopped < 20000 and result.steps == [5000, 10000, 15000, 20000]
     assert all(r == 0.0 for s, r in zip(result.steps, result.mean_reward) if s > stopped)
     assert result.reward_loss == pytest.approx(sum(10.0 - r for r in result.mean_reward))
+
+
+def test_a_trial_stops_when_the_tuning_process_that_started_it_is_gone(monkeypatch):
+    import itertools
+
+    from mediated_transfer.tuning import objective
+
+    parents = itertools.chain([4242], itertools.repeat(1))  # reparented to init after the start
+    monkeypatch.setattr(objective.os, "getppid", lambda: next(parents))
+    with pytest.raises(KeyboardInterrupt, match="launching process is gone"):
+        objective.run_seed(["scale=smoke", "tracking=none", "seed=1000"])

@@ -14,6 +14,7 @@ setting as the bad one it is, not lose the trial.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -34,7 +35,14 @@ def run_seed(overrides: Sequence[str]) -> tuple[RunResult, float]:
 
     cfg = compose_config(overrides)
     spec = run_spec(cfg)
-    result = execute_run(spec)
+    parent = os.getppid()
+
+    def orphaned(*_point) -> None:
+        # The study's process was killed: this worker would compute on unseen, for hours.
+        if os.getppid() != parent:
+            raise KeyboardInterrupt("the tuning's launching process is gone")
+
+    result = execute_run(spec, on_evaluation=orphaned)
     return (_scored_to_the_end(result, spec.budget, spec.eval_points, float(cfg.env.success_reward))
             if result.failed else result), float(cfg.threshold)
 

@@ -11,6 +11,7 @@ launch, so no trial is lost. The provisional defaults are queued as the first tr
 from __future__ import annotations
 
 import multiprocessing
+import os
 import statistics
 import time
 import warnings
@@ -174,7 +175,10 @@ def work(plan: StudyPlan) -> None:
     threadpool_limits(limits=1)  # one worker, one core
     study = load_study(plan)
     started = time.time()
+    parent = os.getppid()
     while True:
+        if os.getppid() != parent:
+            return  # the study's process was killed: an orphaned worker stops (a trial it ran stops itself)
         fail_stale_trials(study)
         trials = study.get_trials(deepcopy=False)
         counts = {s: sum(t.state == s for t in trials) for s in TrialState}
