@@ -138,7 +138,7 @@ def assert_finite_result(spec: RunSpec) -> None:
         assert min(result.mean_reward[at:]) >= spec.threshold - 1e-9
 
 
-@settings(max_examples=600, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(KEYS), VALUES)
 def test_every_numeric_value_is_refused_in_one_line_or_runs(learner_key, value):
     learner, key = learner_key
@@ -215,7 +215,7 @@ OPTIONS = st.one_of(
 ENV = MediatedInteractionEnv("target")
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300, deadline=None, derandomize=True)
 @given(OPTIONS)
 def test_reset_accepts_a_valid_task_or_refuses_in_one_line(options):
     try:
@@ -241,7 +241,7 @@ ACTIONS = st.one_of(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=300, deadline=None, derandomize=True)
 @given(st.lists(ACTIONS, min_size=1, max_size=5))
 def test_step_takes_an_action_index_or_refuses_in_one_line(actions):
     ENV.reset(seed=1)
