@@ -22,6 +22,7 @@ from .mediated_env import (
     MOVE_CW,
     MOVE_IN,
     MOVE_OUT,
+    NUM_ACTIONS,
     PICK_M1,
     PICK_T,
     ROTATE_CCW,
@@ -314,3 +315,33 @@ class ScriptedToolPolicy:
             if gap > best_gap:
                 best, best_gap = action, gap
         return best
+
+
+def random_success_rate(world=None, episodes: int = 20_000, seed: int = 0,
+                        scenario: str = "target") -> float:
+    """Share of ``episodes`` random tasks of ``scenario`` that uniformly random actions solve:
+    how rare a learner's first reward is before it has learned anything (discovery).
+
+    ``world`` is a WorldConfig or a mapping of its fields (None: the default world); the
+    environment's action noise applies as configured. The tasks come from the environment's
+    generator, seeded once, and the actions from a second, independent stream, both derived
+    from ``seed``: the same arguments always give the same rate.
+    """
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
+    env = MediatedInteractionEnv(scenario, world)
+    task_seed, action_seed = (int(np.random.SeedSequence([seed, stream]).generate_state(1)[0])
+                              for stream in (1, 2))
+    actions = np.random.default_rng(action_seed)
+    limit = env.config.max_episode_steps
+    successes = 0
+    env.reset(seed=task_seed)
+    for episode in range(episodes):
+        if episode:
+            env.reset()
+        for action in actions.integers(NUM_ACTIONS, size=limit).tolist():
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                break
+        successes += terminated
+    return successes / episodes
