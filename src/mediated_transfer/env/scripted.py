@@ -79,6 +79,10 @@ class ScriptedToolPolicy:
     3. Pull: each step the move of M1 that brings the target closest to O while it stays on the
        hook.
     4. Once the target is in reach, behave like ScriptedDirectPolicy.
+
+    Moves are predicted in the world's move frame (``move_frame``: radial or along the tool's
+    arms), so the same policy solves both readings. If a turn left M1 out of reach, the tool is
+    first moved, held where it can be, until M1 comes back into reach.
     """
 
     def __init__(self, env, clearance: float = 0.6) -> None:
