@@ -6,11 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mediated_transfer.env.config import WorldConfig
 from mediated_transfer.results import RunResult
 from mediated_transfer.sensitivity.measures import (
     Measures, arm_gain, learning_span, median_or_none, ratio_interval, threshold_time)
-from mediated_transfer.sensitivity.random_policy import random_success_rate
 
 STEPS = [100, 200, 300, 400]
 FAST = Measures(resamples=500)
@@ -68,13 +66,31 @@ def test_arm_gain_compares_a_transfer_arm_with_its_worlds_runs_without_transfer(
     assert (gain.threshold_time, gain.threshold_reached) == (400, False)  # the budget: a bound
 
 
-def test_random_policy_success_rate_is_deterministic_and_a_rate():
-    world = WorldConfig()
-    rate = random_success_rate(world, 300, seed=5)
-    assert 0.0 <= rate <= 1.0
-    assert random_success_rate(world, 300, seed=5) == rate
-    # A goal area almost as large as the interaction range: pulling the target just inside counts.
-    easy = random_success_rate(WorldConfig(goal_radius=9.9), 300, seed=5)
-    assert easy > rate
-    with pytest.raises(ValueError, match="episodes"):
-        random_success_rate(world, 0, seed=5)
+@pytest.mark.slow
+def test_the_study_sweeps_and_reports_end_to_end(tmp_path):
+    """Two worlds x the study's three arms x one seed at smoke scale: the sweep puts each world's
+    runs in its own folder, and the report has a row per world with both gains."""
+    from mediated_transfer.sensitivity.__main__ import main as sensitivity_main
+
+    from .test_sweep import _run_cli
+    from .test_tracking import fresh_store
+
+    fresh_store(tmp_path)
+    common = ["scale=smoke", f"paths.root={tmp_path}", "env=default,tool_frame", "seed=0,1"]
+    _run_cli("experiment=sensitivity", "hydra/launcher=basic", *common)
+    sweep = tmp_path / "multirun" / "sensitivity" / "smoke"
+    found = sorted(p.parent.relative_to(sweep).as_posix() for p in sweep.glob("*/seed=*/*/result.json"))
+    assert found == sorted(f"{cell}/seed={seed}/env={world}" for cell in ("none_0", "regular_50", "scaffolded_50")
+                           for seed in (0, 1) for world in ("default", "tool_frame"))
+
+    assert sensitivity_main(["--random-episodes=50", "--resamples=100", *common]) == 0
+    report = (tmp_path / "reports" / "smoke" / "SENSITIVITY.md").read_text()
+    table = [line for line in report.splitlines() if line.startswith("| default") or line.startswith("| tool_frame")]
+    assert len(table) == 2 and all("2 / 2 / 2" in line for line in table)
+    assert "move_frame radial -> tool" in report
+    assert (tmp_path / "reports" / "smoke" / "sensitivity" / "sensitivity.png").stat().st_size > 0
+    # The hand-written reading survives a rebuild.
+    path = tmp_path / "reports" / "smoke" / "SENSITIVITY.md"
+    path.write_text(report.replace("(not written yet)", "A person's reading."))
+    assert sensitivity_main(["--random-episodes=50", "--resamples=100", *common]) == 0
+    assert "A person's reading." in path.read_text()

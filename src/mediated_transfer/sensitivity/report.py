@@ -23,7 +23,7 @@ from ..reporting.figures import _pyplot
 from ..reporting.formats import write_csv
 from ..reporting.paper import paper_rows
 from .measures import ArmGain, Measures, arm_gain, learning_span, median_or_none
-from .random_policy import random_success_rate
+from ..env.scripted import random_success_rate
 from .study import Study, World
 
 REPORT = "SENSITIVITY.md"
