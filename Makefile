@@ -37,7 +37,7 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot refine table1 slurm-check
+.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot refine table1 sensitivity slurm-check
 
 # On SLURM (ARGS="hydra/launcher=slurm ..."), every table is queued first (wait=false), then
 # each command again waits for its queued jobs: the tables share their time in the queue.
@@ -85,3 +85,7 @@ refine: $(STAMP) ## Manual refinement of LEARNER=rbf|fsr: named candidates on 10
 
 table1: $(STAMP) ## Build reports/table1.md and its figures from the committed tuning/*/trials.csv
 	$(BIN)/python -m mediated_transfer.tuning.table1 $(ARGS)
+
+sensitivity: $(STAMP) ## Issue 13's pre-registered sensitivity study at SCALE (resumable sweep), then reports/SENSITIVITY.md
+	$(BIN)/python -m mediated_transfer experiment=sensitivity scale=$(SCALE) $(ARGS)
+	$(BIN)/python -m mediated_transfer.sensitivity scale=$(SCALE) $(ARGS)

@@ -161,8 +161,17 @@ def test_python_configured_options_compose_to_their_dataclass_defaults(hydra_con
 
 
 def test_no_yaml_file_repeats_a_python_default():
-    for group in schema.PYTHON_OPTIONS:
-        assert not (CONF_DIR / group).exists(), f"conf/{group}/ would hold a second copy of the defaults"
+    # A Python-configured group has YAML options only as variants (conf/env/: readings of the
+    # world): each extends one of the group's dataclass options and sets only what it changes.
+    for group, options in schema.PYTHON_OPTIONS.items():
+        for path in sorted((CONF_DIR / group).glob("*.yaml")):
+            values = OmegaConf.to_container(OmegaConf.load(path))
+            defaults = values.pop("defaults", None)
+            assert path.stem not in options, f"{path} would be a second copy of {group}={path.stem}"
+            assert defaults and defaults[0] in options and defaults[-1] == "_self_", path
+            base = dataclasses.asdict(options[defaults[0]]())
+            repeated = [k for k, v in values.items() if base.get(k) == v]
+            assert values and not repeated, f"{path} repeats the defaults of {', '.join(repeated)}"
 
 
 def test_network_representation_holds_no_keys_of_its_own(hydra_context):
@@ -192,6 +201,8 @@ def test_reduced_scales_report_beside_not_over_the_paper_scale(hydra_context):
     ("cell=regular_7", ["none_0", "regular_50", "scaffolded_5000"]),
     ("experiment=table9", ["table2_rbf", "table3_fsr", "table4_dnn"]),
     ("n_source=abc", ["0", "1", "15", "50", "100", "5000"]),
+    ("env=goal_radius_3", ["default", "goal_radius_1.5", "goal_radius_0.75", "far_annulus", "long_hook",
+                           "tool_frame"]),
 ])
 def test_unknown_option_is_one_line_naming_the_allowed_options(override, allowed):
     with pytest.raises(ConfigError) as error:
@@ -237,6 +248,8 @@ def test_any_non_negative_n_source_composes():
     (["seed=-1"], "seed must be >= 0"),
     (["algorithm=dqn", "representation=network", "algorithm.kernels=turbo"],
      r"^algorithm.kernels must be fast or reference, got 'turbo'$"),
+    (["env.move_frame=polar"], r"^env.move_frame must be one of radial, tool, got 'polar'$"),
+    (["env=tool_frame", "env.move_frame=1"], r"^env.move_frame must be one of radial, tool, got '1'$"),
 ])
 def test_invalid_combination_fails_before_any_work(hydra_context, overrides, message):
     with pytest.raises(ConfigError, match=message):

@@ -159,6 +159,98 @@ def test_a_move_carries_the_tool_one_unit_along_the_frame_at_the_active_location
     assert env.tool_angle == pytest.approx(0.0, abs=1e-12)
 
 
+@pytest.mark.parametrize("pick", [PICK_M1, PICK_M3])
+def test_the_radial_frame_is_the_default_and_attached_at_the_held_location(pick):
+    # The frame of today's environment, whichever location is held: out = away from O at it.
+    task = Task((12.0, 0.0), (1.0, -2.0), math.pi / 3)  # the whole tool in reach
+    for config in (NOISELESS, WorldConfig(action_noise=0.0, move_frame="radial")):
+        env = make(task, config)
+        env.step(pick)
+        held = env.picking_locations[pick]
+        u = held / np.linalg.norm(held)
+        for action, direction in ((MOVE_OUT, u), (MOVE_CCW, np.array([-u[1], u[0]]))):
+            before = env.picking_locations
+            env.step(action)
+            np.testing.assert_allclose(env.picking_locations[:3], before[:3] + direction, atol=1e-9)
+            u = env.picking_locations[pick] / np.linalg.norm(env.picking_locations[pick])
+
+
+TOOL_FRAME = WorldConfig(action_noise=0.0, move_frame="tool")
+# The whole tool in reach: M2 (1, -2), handle at 60 degrees: M1 (4.5, 4.06), M3 (-2.03, -0.25).
+TILTED = Task((12.0, 0.0), (1.0, -2.0), math.pi / 3)
+
+
+@pytest.mark.parametrize("pick", [PICK_M1, PICK_M2, PICK_M3])
+@pytest.mark.parametrize(
+    "action, along",
+    [
+        (MOVE_OUT, (0.5, math.sqrt(3) / 2)),  # along the handle, M2 -> M1
+        (MOVE_IN, (-0.5, -math.sqrt(3) / 2)),
+        (MOVE_CCW, (-math.sqrt(3) / 2, 0.5)),  # along the hook, M2 -> M3
+        (MOVE_CW, (math.sqrt(3) / 2, -0.5)),
+    ],
+)
+def test_the_tool_frame_moves_a_held_tool_along_its_own_arms(pick, action, along):
+    env = make(TILTED, TOOL_FRAME)
+    env.step(pick)
+    env.step(action)
+    expected = TILTED.picking_locations(TOOL_FRAME)
+    expected[:3] += along  # the same move whichever of M1, M2, M3 is held
+    np.testing.assert_allclose(env.picking_locations, expected, atol=1e-9)
+    assert env.tool_angle == pytest.approx(math.pi / 3, abs=1e-12)
+
+
+def test_the_tool_frame_turns_with_the_tool():
+    env = make(TILTED, TOOL_FRAME)
+    env.step(PICK_M2)
+    env.step(ROTATE_CCW)  # the handle now points at 105 degrees
+    before = env.picking_locations
+    env.step(MOVE_OUT)
+    along = (math.cos(7 * math.pi / 12), math.sin(7 * math.pi / 12))
+    np.testing.assert_allclose(env.picking_locations[:3], before[:3] + along, atol=1e-9)
+
+
+def test_the_tool_frame_moves_the_target_radially():
+    # The target's disc has no orientation: holding T keeps the radial frame.
+    radial, tool = make(Task((5.0, 0.0), (-4.0, -3.0), 0.0)), make(Task((5.0, 0.0), (-4.0, -3.0), 0.0), TOOL_FRAME)
+    for env in (radial, tool):
+        env.step(PICK_T)
+        env.step(MOVE_IN)
+        env.step(MOVE_CCW)
+    np.testing.assert_allclose(tool.target_position, [4.0, 1.0], atol=1e-9)
+    np.testing.assert_array_equal(tool.picking_locations, radial.picking_locations)
+
+
+def test_the_tool_frame_refuses_moves_out_of_range_and_through_the_wall():
+    config = WorldConfig(action_noise=0.0, move_frame="tool", tool_handle_length=8.5)
+    env = make(Task((-12.0, 0.0), (9.0, 0.0), 0.0), config)  # M1 at (17.5, 0) beyond reach
+    env.step(PICK_M2)
+    before = env.picking_locations
+    env.step(MOVE_OUT)  # M2 would stay in reach (10), M1 would pass the wall (18.5 > 17.75)
+    np.testing.assert_array_equal(env.picking_locations, before)
+    env.step(MOVE_IN)
+    env.step(MOVE_IN)  # M2 at (7, 0)
+    env.step(PICK_M3)  # M3 at (7, 3.5)
+    env.step(MOVE_IN)  # along -handle: M3 to (6, 3.5)
+    np.testing.assert_allclose(env.picking_locations[M3], [6.0, 3.5], atol=1e-9)
+    env = make(Task((-12.0, 0.0), (9.5, 0.0), 0.0), TOOL_FRAME)
+    env.step(PICK_M2)
+    before = env.picking_locations
+    env.step(MOVE_OUT)  # M2 would leave the range (10.5)
+    np.testing.assert_array_equal(env.picking_locations, before)
+
+
+def test_the_tool_frame_hooks_the_target_by_pulling_along_the_handle():
+    # Handle towards O, the hook behind the out-of-reach target: "out" along the handle pulls.
+    env = make(Task((12.0, 0.0), (13.5, 1.3), math.pi), TOOL_FRAME)
+    env.step(PICK_M1)
+    for _ in range(3):
+        env.step(MOVE_OUT)
+    assert np.linalg.norm(env.target_position) < 10.0
+    env.step(PICK_T)
+    assert env.active_location == T
+
+
 @pytest.mark.parametrize("action, turn", [(ROTATE_CCW, math.pi / 4), (ROTATE_CW, -math.pi / 4)])
 @pytest.mark.parametrize("pivot", [PICK_M2, PICK_M3])
 def test_a_turn_rotates_the_tool_around_the_active_location(action, turn, pivot):
@@ -278,6 +370,10 @@ def test_bad_render_mode_and_config_are_named():
         MediatedInteractionEnv(config={"goal_radiuss": 1.0})
     with pytest.raises(ValueError, match="env.substeps"):
         MediatedInteractionEnv(config={"substeps": 0})
+    with pytest.raises(ValueError, match="^env.move_frame must be one of radial, tool, got 'polar'$"):
+        MediatedInteractionEnv(config={"move_frame": "polar"})
+    with pytest.raises(ValueError, match="env.move_frame must be one of radial, tool, got 1"):
+        WorldConfig(move_frame=1)
 
 
 @pytest.mark.parametrize(

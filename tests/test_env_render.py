@@ -49,6 +49,14 @@ def test_animate_writes_a_gif_of_the_episode(tmp_path):
         assert gif.n_frames == summary["steps"] + 1
 
 
+def test_animate_shows_a_named_world(tmp_path):
+    out = tmp_path / "tool_frame.gif"
+    summary = animate.main(["--env", "tool_frame", "--out", str(out), "--seed", "1"])
+    assert summary["is_success"] and out.exists()
+    with pytest.raises(SystemExit, match="env=nope: no such option; allowed: default"):
+        animate.main(["--env", "nope", "--out", str(tmp_path / "x.gif")])
+
+
 def test_animate_rejects_an_unknown_policy(tmp_path):
     with pytest.raises(SystemExit):
         animate.main(["--policy", "clever", "--out", str(tmp_path / "x.gif")])

@@ -110,6 +110,15 @@ def test_cache_key_covers_n_source_seed_pool_and_world(tmp_path):
     assert not list(tmp_path.glob("*.tmp"))
 
 
+def test_the_move_frame_shares_a_cached_set_and_keeps_older_files_valid(tmp_path):
+    # Sampling and clustering read the world's sizes only: both frames share one set, and the
+    # key of the default world is the one it had before the world gained move_frame.
+    key = lambda world: source_tasks._cache_path(tmp_path, 50, world, 10_000, 0, source_tasks.ClusteringConfig())
+    assert key(WORLD).name == "source_tasks_n50_589c123fa8fb1c7b.npz"
+    assert key(WorldConfig(move_frame="tool")) == key(WORLD)
+    assert key(WorldConfig(tool_hook_length=5.0)) != key(WORLD)
+
+
 def test_a_cache_file_of_the_wrong_shape_is_recomputed(tmp_path):
     first = source_task_set(8, WORLD, pool_size=POOL, seed=3, cache_dir=tmp_path)
     (path,) = tmp_path.glob("*.npz")

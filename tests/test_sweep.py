@@ -157,6 +157,35 @@ def test_a_folder_holding_another_configuration_is_refused(root, source_cache):
         run_job(cfg, folder)
 
 
+def test_a_result_recorded_before_the_world_gained_a_key_is_the_same_run(root, source_cache):
+    # result.json of a run made before env.move_frame existed: it ran the default (radial).
+    from hydra import compose, initialize_config_dir
+
+    with initialize_config_dir(config_dir=str(CONF_DIR), version_base="1.3"):
+        cfg = compose("config", overrides=[*_common(root, source_cache), "tracking=none"])
+        tool = compose("config", overrides=[*_common(root, source_cache), "tracking=none", "env=tool_frame"])
+    folder = root / "run"
+    run_job(cfg, folder)
+    stored = json.loads((folder / "result.json").read_text())
+    del stored["config"]["env"]["move_frame"]
+    (folder / "result.json").write_text(json.dumps(stored))
+    run_job(cfg, folder)  # found, not refused
+    with pytest.raises(ConfigError, match="world.move_frame: stored 'radial', now 'tool'"):
+        run_job(tool, folder)
+
+
+def test_a_sweep_over_named_worlds_gives_each_its_own_folder(root, source_cache):
+    _run_cli("-m", "env=default,goal_radius_1.5,tool_frame", "hydra/launcher=basic", "tracking=none",
+             *_common(root, source_cache))
+    sweep_dir = root / "multirun" / "linear_q_rbf" / "smoke"
+    found = {p.parent.relative_to(sweep_dir).as_posix(): json.loads(p.read_text())["config"]["env"]
+             for p in sweep_dir.glob("*/seed=*/*/result.json")}
+    assert set(found) == {"none_0/seed=0/env=default", "none_0/seed=0/env=goal_radius_1.5",
+                          "none_0/seed=0/env=tool_frame"}
+    assert found["none_0/seed=0/env=goal_radius_1.5"]["goal_radius"] == 1.5
+    assert found["none_0/seed=0/env=tool_frame"]["move_frame"] == "tool"
+
+
 def test_submitit_local_launcher_runs_the_jobs(root, source_cache):
     result = subprocess.run(
         [sys.executable, "-m", "mediated_transfer", "experiment=table2_rbf", "hydra/launcher=submitit_local",

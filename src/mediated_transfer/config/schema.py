@@ -7,7 +7,8 @@ One place per default, by kind:
   ``WorldConfig`` (env/config.py), ``LinearQConfig`` (learners/linear_q.py), ``RBFConfig``
   (learners/rbf.py), ``FSRConfig`` (learners/fsr.py), ``DQNConfig`` (learners/dqn.py). They are
   the options of the groups ``env``, ``algorithm`` and ``representation`` (registered below;
-  there are no YAML files for them).
+  there are no YAML copies of them). conf/env/*.yaml are further ``env`` options, the readings
+  of the world the paper leaves open: each extends ``default`` and sets only what it changes.
 - The experiment's plumbing (scales, paths, tracking, the root keys, table reports) exists only
   for the command line, so its values and their comments live in conf/*.yaml; the dataclasses
   here give their keys and types only.

@@ -3,6 +3,7 @@
     python -m mediated_transfer.env.animate --scenario target --policy scripted \\
         --out reports/episode.gif --seed 1
     python -m mediated_transfer.env.animate --run <run folder> --seed 3 --out reports/trained.gif
+    python -m mediated_transfer.env.animate --env tool_frame --seed 1 --out reports/tool_frame.gif
 
 A policy is a callable observation -> action; ``POLICIES`` maps each name to a factory
 ``(env, seed) -> policy``. Add an entry to offer more. ``--run`` shows instead the greedy
@@ -87,6 +88,8 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--policy", choices=sorted(POLICIES), default=None, help="default: scripted")
     parser.add_argument("--run", default=None,
                         help="a run's folder: its saved learner's greedy policy, in the run's world")
+    parser.add_argument("--env", default=None,
+                        help="a named world (an env option: default, tool_frame, long_hook, ...)")
     parser.add_argument("--out", default="reports/episode.gif")
     parser.add_argument("--seed", type=int, default=0, help="seeds the task, the noise, the policy")
     parser.add_argument("--noise", type=float, default=None,
@@ -105,6 +108,16 @@ def main(argv: list[str] | None = None) -> dict:
         except SavedLearnerError as error:
             raise SystemExit(f"Cannot animate: {error}") from None
         config, label = spec.world, f"trained ({spec.describe()})"
+    if args.env is not None:
+        if args.run is not None:
+            parser.error("--run shows the run's learner in the run's world: leave out --env")
+        from ..config.compose import ConfigError
+        from ..config.worlds import named_world
+
+        try:
+            config = named_world(args.env)
+        except ConfigError as error:
+            raise SystemExit(f"Cannot animate: {error}") from None
     if args.noise is not None:
         config = dataclasses.replace(config, action_noise=args.noise)
     env = MediatedInteractionEnv(args.scenario, config, render_mode="rgb_array")

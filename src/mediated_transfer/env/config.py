@@ -21,6 +21,8 @@ MAX_REWARD = 1e6
 """Largest success reward (the paper: 10); sums of larger ones may overflow to inf."""
 MAX_WALL_SEGMENTS = 10_000
 """Most wall segments: a finer polygon than this changes nothing but the cost of collisions."""
+MOVE_FRAMES = ("radial", "tool")
+"""The readings of the paper's "non-static coordinate system" of moves (``move_frame``)."""
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,16 @@ class WorldConfig:
     rest_speed: float = 1e-3
     """A free object slower than this (units/s, rad/s) is set to rest, as Chipmunk's sleeping
     would; while everything rests, steps that drive nothing skip the physics."""
+    move_frame: str = "radial"
+    """The frame of the four move actions (5-8), the paper's "non-static coordinate system"
+    (its Fig. 1b), which it draws but does not define. ``radial``: the frame attached at the
+    active picking location P and oriented by O: 5/6 move P radially out/in (along +-P/|P|),
+    7/8 tangentially counter-clockwise/clockwise around O. ``tool``: when a tool location
+    (M1, M2 or M3) is active, the frame attached to the tool itself, whichever of the three is
+    held: 5/6 move the tool along its handle, towards M1 / away from it (+-(M1 - M2)/|M1 - M2|),
+    7/8 along its hook, towards M3 / away from it (+-(M3 - M2)/|M3 - M2|, the handle's
+    direction turned by +pi/2); holding the target T, whose disc has no orientation, keeps the
+    radial frame. Both frames map 5 to a direction and 7 to that direction turned by +pi/2."""
 
     def __post_init__(self) -> None:
         # Python callers and mappings are not typed by Hydra: a number where a number belongs,
@@ -86,7 +98,10 @@ class WorldConfig:
             if f.type == "float" and (isinstance(value, bool) or not isinstance(value, (int, float))
                                       or not math.isfinite(value)):
                 raise ValueError(f"env.{f.name} must be a finite number, got {value!r}")
-        positive = [f.name for f in fields(self) if f.name not in ("action_noise", "damping")]
+        if self.move_frame not in MOVE_FRAMES:
+            raise ValueError(f"env.move_frame must be one of {', '.join(MOVE_FRAMES)}, got {self.move_frame!r}")
+        positive = [f.name for f in fields(self) if f.type in ("int", "float")
+                    and f.name not in ("action_noise", "damping")]
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"env.{name} must be > 0, got {getattr(self, name)!r}")

@@ -57,22 +57,34 @@ class MediatedInteractionEnv(gymnasium.Env):
     | action | meaning |
     |--------|---------|
     | 0-4    | pick M1, M2, M3, T, O: that location becomes active; refused (a no-op) when it lies outside the interaction range |
-    | 5      | move the active location `move_distance` radially out (away from O) |
-    | 6      | move it radially in (towards O) |
-    | 7      | move it tangentially, counter-clockwise around O |
-    | 8      | move it tangentially, clockwise |
+    | 5      | move the active location `move_distance` radially out (away from O); in the tool frame along the handle, towards M1 |
+    | 6      | move it radially in (towards O); in the tool frame along the handle, away from M1 |
+    | 7      | move it tangentially, counter-clockwise around O; in the tool frame along the hook, towards M3 |
+    | 8      | move it tangentially, clockwise; in the tool frame along the hook, away from M3 |
     | 9      | turn the tool by +`rotation_angle` (pi/4, counter-clockwise) around the active location |
     | 10     | turn it by -`rotation_angle` |
 
     A move carries the whole object holding the active location (the tool for M1-M3, the target
-    for T) along the radial/tangential frame attached at that location (the paper's Figure 1b).
+    for T) one `move_distance` along the frame of the moves, `move_frame` (the paper's "non-static
+    coordinate system", its Figure 1b):
+
+    | action | `move_frame="radial"` (default): at the active location P | `"tool"`, a tool location active | `"tool"`, T active |
+    |--------|-------------------------------|----------------------------------------------------|------------|
+    | 5      | out, along P/\\|P\\|            | along the handle, towards M1: (M1 - M2)/\\|M1 - M2\\| | as radial |
+    | 6      | in, along -P/\\|P\\|            | along the handle, away from M1                     | as radial |
+    | 7      | tangentially ccw around O     | along the hook, towards M3: (M3 - M2)/\\|M3 - M2\\|   | as radial |
+    | 8      | tangentially cw               | along the hook, away from M3                       | as radial |
+
+    The tool frame is the same whichever of M1, M2, M3 is held (it turns with the tool, not with
+    the held location's position); the held location only decides the range check below.
     Refused (no-ops): any move or turn while O is active (O is absorbing); a turn while T is
-    active; a move at O itself, where the radial frame is undefined; a move that would carry the
-    active location out of the interaction range (so a held location never leaves the range by
-    the agent's own hand); a move or turn that would carry the tool through the wall (kinematic
-    bodies do not collide with static ones, so the wall is enforced here). Every step, refused
-    or not, lasts `step_duration` simulated seconds, in which pushed objects coast and damp out.
-    If contacts push the active location out of range, the grip is lost: O becomes active.
+    active; a radial move at O itself, where the radial frame is undefined; a move that would
+    carry the active location out of the interaction range (so a held location never leaves the
+    range by the agent's own hand); a move or turn that would carry the tool through the wall
+    (kinematic bodies do not collide with static ones, so the wall is enforced here). Every
+    step, refused or not, lasts `step_duration` simulated seconds, in which pushed objects
+    coast and damp out. If contacts push the active location out of range, the grip is lost:
+    O becomes active.
 
     Physics: the held object is driven kinematically (infinite mass) along the action's exact
     motion, in `substeps` pymunk steps; the other object is a dynamic body that it pushes, or
@@ -120,7 +132,8 @@ class MediatedInteractionEnv(gymnasium.Env):
 
     ## Version history
 
-    * v0: initial version.
+    * v0: initial version; `move_frame` added later (its default, `"radial"`, is the frame v0
+      always had, with bit-identical trajectories).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -158,6 +171,9 @@ class MediatedInteractionEnv(gymnasium.Env):
         self._max_steps = config.max_episode_steps
         self._tool_limit = config.world_radius - config.tool_width / 2
         self._lh, self._lk = config.tool_handle_length, config.tool_hook_length
+        if config.move_frame == "tool":
+            # An instance attribute over the method: the radial frame's step stays as it was.
+            self._move_active = self._move_in_tool_frame
         half = config.rotation_angle / 2
         self._turns = {  # action -> (angle, cos/sin of the full and the half turn)
             ROTATE_CCW: (config.rotation_angle, *_cos_sin(2 * half), *_cos_sin(half)),
@@ -331,6 +347,38 @@ class MediatedInteractionEnv(gymnasium.Env):
             world.translate_tool(dx, dy)
         else:
             world.idle()  # refused: the tool would pass through the wall
+
+    _move_radially = _move_active
+
+    def _move_in_tool_frame(self, a: int, active: int) -> None:
+        """``move_frame="tool"``: a held tool moves along its own arms (see the class docstring)."""
+        if active == T:
+            self._move_radially(a, active)  # the target's disc has no orientation
+            return
+        loc = self._loc
+        # Unit vectors from the sensed picking locations: e along the handle (M2 -> M1), h along
+        # the hook (M2 -> M3), each scaled to one move.
+        f = self._move / self._lh
+        ex, ey = (loc[0] - loc[2]) * f, (loc[1] - loc[3]) * f
+        if a == MOVE_OUT:
+            dx, dy = ex, ey
+        elif a == MOVE_IN:
+            dx, dy = -ex, -ey
+        elif a == MOVE_CCW:
+            dx, dy = -ey, ex
+        else:
+            dx, dy = ey, -ex
+        i = 2 * active
+        if math.hypot(loc[i] + dx, loc[i + 1] + dy) > self._range:
+            self._world.idle()  # refused: the agent cannot carry a location out of its reach
+        elif (
+            math.hypot(loc[0] + dx, loc[1] + dy) <= self._tool_limit
+            and math.hypot(loc[2] + dx, loc[3] + dy) <= self._tool_limit
+            and math.hypot(loc[4] + dx, loc[5] + dy) <= self._tool_limit
+        ):
+            self._world.translate_tool(dx, dy)
+        else:
+            self._world.idle()  # refused: the tool would pass through the wall
 
     def _turn_tool(self, a: int, pivot: int) -> None:
         angle, c, s, ch, sh = self._turns[a]

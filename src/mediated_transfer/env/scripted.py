@@ -22,6 +22,7 @@ from .mediated_env import (
     MOVE_CW,
     MOVE_IN,
     MOVE_OUT,
+    NUM_ACTIONS,
     PICK_M1,
     PICK_T,
     ROTATE_CCW,
@@ -33,12 +34,17 @@ from .task import M1, M2, M3, T, _segment_distance
 _MOVES = (MOVE_OUT, MOVE_IN, MOVE_CCW, MOVE_CW)
 
 
-def _move_direction(point: np.ndarray, action: int) -> np.ndarray:
-    """Unit direction in which ``action`` moves a picking location at ``point``."""
-    r = math.hypot(point[0], point[1])
-    if r == 0.0:
-        return np.zeros(2)  # the environment refuses moves at O
-    u = point / r
+def _move_direction(point: np.ndarray, action: int, handle: np.ndarray | None = None) -> np.ndarray:
+    """Unit direction in which ``action`` moves a picking location at ``point``: in the radial
+    frame at ``point``, or, given the tool's ``handle`` direction (M2 -> M1), in the tool frame
+    (env.config.move_frame; the environment's action table)."""
+    if handle is not None:
+        u = handle
+    else:
+        r = math.hypot(point[0], point[1])
+        if r == 0.0:
+            return np.zeros(2)  # the environment refuses moves at O
+        u = point / r
     return {MOVE_OUT: u, MOVE_IN: -u, MOVE_CCW: np.array([-u[1], u[0]]),
             MOVE_CW: np.array([u[1], -u[0]])}[action]
 
@@ -73,6 +79,10 @@ class ScriptedToolPolicy:
     3. Pull: each step the move of M1 that brings the target closest to O while it stays on the
        hook.
     4. Once the target is in reach, behave like ScriptedDirectPolicy.
+
+    Moves are predicted in the world's move frame (``move_frame``: radial or along the tool's
+    arms), so the same policy solves both readings. If a turn left M1 out of reach, the tool is
+    first moved, held where it can be, until M1 comes back into reach.
     """
 
     def __init__(self, env, clearance: float = 0.6) -> None:
@@ -86,6 +96,7 @@ class ScriptedToolPolicy:
         self.tool_limit = c.world_radius - c.tool_width / 2
         self.turn = c.rotation_angle
         self.step_length = c.move_distance
+        self.tool_frame = c.move_frame == "tool"  # moves of the held tool along its own arms
 
     def reset(self) -> None:
         """Nothing to forget: the policy has no memory."""
@@ -136,12 +147,17 @@ class ScriptedToolPolicy:
         e, h = self._frame(angle)
         rel = target - locations[M2]
         x, y = float(rel @ e), float(rel @ h)
-        cradled = self.contact - 0.3 <= x <= self.lh and self.contact - 0.3 <= y <= self.lk - 0.1
+        # In the cradle, with the handle pointing inwards enough that dragging along it brings
+        # the target nearer O (a long hook can hold a target the wrong way round).
+        cradled = (self.contact - 0.3 <= x <= self.lh and self.contact - 0.3 <= y <= self.lk - 0.1
+                   and float(e @ target) < -0.3 * math.hypot(*target))
         if not cradled:
             wanted = self._choose_angle(target, angle)
             if abs(math.remainder(wanted - angle, 2 * math.pi)) > 1e-6:
                 return self._rotate_towards(locations, angle, wanted)
         if env.active_location != M1:
+            if math.hypot(*locations[M1]) > self.reach:
+                return self._bring_m1_into_reach(locations, e)  # e.g. after a turn around M2
             return PICK_M1  # M1 is the handle's end: the tool is moved by it from here on
         if cradled:
             return self._pull(locations, e, h, x, y)
@@ -161,10 +177,12 @@ class ScriptedToolPolicy:
 
     def _stage(self, x: float, y: float) -> int:
         """How far the approach has come, from the target's tool coordinates (x, y)."""
-        x_approach = self._zones()[0]
+        x_approach, y_beside, _ = self._zones()
         above_tip = y >= self.lk + self.contact + 0.1
+        # Above the tip, only a target just beside it is ready for the sweep (from far above,
+        # going down to it counts as stage 2, so its moves never fall back a stage).
         if x >= self.contact + 0.1 and y >= self.contact and (
-            not above_tip or abs(x - x_approach) <= 0.7
+            not above_tip or (abs(x - x_approach) <= 0.7 and y <= y_beside + 1.0)
         ):
             return 3
         if above_tip:
@@ -179,13 +197,17 @@ class ScriptedToolPolicy:
         to_hook = math.hypot(x, y - min(max(y, 0.0), self.lk))
         return min(to_handle, to_hook) - self.contact
 
+    def _tool_step(self, point: np.ndarray, action: int, e: np.ndarray) -> np.ndarray:
+        """How far ``action`` moves the tool held at ``point`` (``e``: the handle's direction)."""
+        return self.step_length * _move_direction(point, action, e if self.tool_frame else None)
+
     def _move_m1_to(self, locations, e, h, goal, stage: int) -> int:
         """The move of M1 that brings the target's tool coordinates closest to ``goal``
         without touching the tool, preferring moves that do not fall back a stage."""
         m1, target, m2 = locations[M1], locations[T], locations[M2]
         best, best_key = MOVE_IN, None
         for action in _MOVES:
-            step = self.step_length * _move_direction(m1, action)
+            step = self._tool_step(m1, action, e)
             if not self._allowed(locations, step):
                 continue
             rel = target - (m2 + step)
@@ -197,9 +219,9 @@ class ScriptedToolPolicy:
                 best, best_key = action, key
         return best
 
-    def _allowed(self, locations, step) -> bool:
-        """Whether the environment accepts moving the tool (held at M1) by ``step``."""
-        if np.linalg.norm(locations[M1] + step) > self.reach:
+    def _allowed(self, locations, step, held: int = M1) -> bool:
+        """Whether the environment accepts moving the tool (held at ``held``) by ``step``."""
+        if np.linalg.norm(locations[held] + step) > self.reach:
             return False
         return bool(np.all(np.linalg.norm(locations[:3] + step, axis=1) <= self.tool_limit))
 
@@ -208,7 +230,7 @@ class ScriptedToolPolicy:
         target, m1 = locations[T], locations[M1]
         best, best_radius = None, math.inf
         for action in _MOVES:
-            step = self.step_length * _move_direction(m1, action)
+            step = self._tool_step(m1, action, e)
             if not self._allowed(locations, step):
                 continue
             along_e, along_h = float(step @ e), float(step @ h)
@@ -216,7 +238,10 @@ class ScriptedToolPolicy:
             push_e = max(0.0, along_e - (x - self.contact))
             push_h = max(0.0, along_h - (y - self.contact))
             new_y = y - along_h + push_h
-            if push_e <= 0.0 and push_h <= 0.0 and along_e <= 0.0:
+            # Near the hook's end, a move along the hook first sinks the target deeper into the
+            # cradle (the tool frame's moves keep the target's y on a lattice of unit steps).
+            deeper = y > self.lk - 0.35 and self.contact <= new_y < y
+            if push_e <= 0.0 and push_h <= 0.0 and along_e <= 0.0 and not deeper:
                 continue  # leaves the target behind
             if new_y > self.lk - 0.35:
                 continue  # would slide off the hook's end
@@ -252,17 +277,41 @@ class ScriptedToolPolicy:
             gap = min(gap, _segment_distance(target, m2, m1), _segment_distance(target, m2, m3))
         return gap - self.contact
 
+    def _bring_m1_into_reach(self, locations, e) -> int:
+        """Hold the tool where it can be held and move it so that M1 comes closest to O,
+        keeping clear of the target."""
+        active = self.env.active_location
+        if active not in (M1, M2, M3):
+            return self._pick_reachable(locations)
+        target, p = locations[T], locations[active]
+        best, best_radius = None, math.inf
+        for action in _MOVES:
+            step = self._tool_step(p, action, e)
+            if not self._allowed(locations, step, active):
+                continue
+            moved = locations[:3] + step
+            gap = min(_segment_distance(target, moved[M2], moved[M1]),
+                      _segment_distance(target, moved[M2], moved[M3])) - self.contact
+            radius = float(np.linalg.norm(moved[M1]))
+            if gap >= 0.1 and radius < best_radius:
+                best, best_radius = action, radius
+        return best if best is not None else self._back_off(locations)
+
+    def _pick_reachable(self, locations) -> int:
+        reachable = [i for i in (M2, M1, M3) if np.linalg.norm(locations[i]) <= self.reach]
+        return reachable[0] if reachable else PICK_M1
+
     def _back_off(self, locations) -> int:
         """No turn is safe: move the tool (held anywhere in reach) away from the target."""
         active = self.env.active_location
         if active not in (M1, M2, M3):
-            reachable = [i for i in (M2, M1, M3) if np.linalg.norm(locations[i]) <= self.reach]
-            return reachable[0] if reachable else PICK_M1
+            return self._pick_reachable(locations)
         target, p = locations[T], locations[active]
+        e = self._frame(self.env.tool_angle)[0]
         best, best_gap = MOVE_IN, -math.inf
         for action in _MOVES:
-            step = self.step_length * _move_direction(p, action)
-            if np.linalg.norm(p + step) > self.reach:
+            step = self._tool_step(p, action, e)
+            if not self._allowed(locations, step, active):
                 continue
             moved = locations[:3] + step
             gap = min(_segment_distance(target, moved[M2], moved[M1]),
@@ -270,3 +319,33 @@ class ScriptedToolPolicy:
             if gap > best_gap:
                 best, best_gap = action, gap
         return best
+
+
+def random_success_rate(world=None, episodes: int = 20_000, seed: int = 0,
+                        scenario: str = "target") -> float:
+    """Share of ``episodes`` random tasks of ``scenario`` that uniformly random actions solve:
+    how rare a learner's first reward is before it has learned anything (discovery).
+
+    ``world`` is a WorldConfig or a mapping of its fields (None: the default world); the
+    environment's action noise applies as configured. The tasks come from the environment's
+    generator, seeded once, and the actions from a second, independent stream, both derived
+    from ``seed``: the same arguments always give the same rate.
+    """
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
+    env = MediatedInteractionEnv(scenario, world)
+    task_seed, action_seed = (int(np.random.SeedSequence([seed, stream]).generate_state(1)[0])
+                              for stream in (1, 2))
+    actions = np.random.default_rng(action_seed)
+    limit = env.config.max_episode_steps
+    successes = 0
+    env.reset(seed=task_seed)
+    for episode in range(episodes):
+        if episode:
+            env.reset()
+        for action in actions.integers(NUM_ACTIONS, size=limit).tolist():
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                break
+        successes += terminated
+    return successes / episodes

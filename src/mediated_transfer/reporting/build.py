@@ -22,7 +22,7 @@ from .. import tracking
 from ..metrics import MetricsConfig
 from .collect import CellRuns, collect_sweep, runs_per_variant, variant_label
 from .collect import summaries as cell_summaries
-from .compose import variant_of
+from .compose import ReportError, variant_of
 from .figures import Curve, cell_label, fastest_transfer, plot_curves
 from .paper import paper_rows
 from .tables import TableHeader, table_rows, write_tables
@@ -58,8 +58,11 @@ def build_report(cfg: DictConfig) -> Report:
     a config without Hydra's part is reported as the baseline.
     """
     if cfg.get("report") is None:
-        raise ValueError(f"the config '{cfg.name}' has no report section; build reports of an "
-                         "experiment, e.g. experiment=table2_rbf")
+        # ReportError: `reporting` without experiment names skips it (e.g. experiment=sensitivity,
+        # whose report is its own command).
+        raise ReportError(f"'{cfg.name}' has no table report section; build reports of a table "
+                          "experiment, e.g. experiment=table2_rbf (another experiment's file says "
+                          "how it is reported)")
     variant = variant_of(cfg)
     cells = finished_runs(cfg)
     metrics_cfg = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))

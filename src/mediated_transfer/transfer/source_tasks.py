@@ -39,6 +39,10 @@ log = logging.getLogger(__name__)
 
 #: Bump when the selection procedure changes, so old cache files are no longer used.
 METHOD_VERSION = 1
+#: World fields a source task set does not depend on (sampling and clustering read the sizes
+#: only), left out of the cache key: the move frame's readings share one set, and the files
+#: cached before the field existed stay valid.
+NOT_IN_CACHE_KEY = ("move_frame",)
 
 
 @dataclass(frozen=True)
@@ -217,7 +221,7 @@ def _cache_path(cache_dir, n_source, world, pool_size, seed, clustering) -> Path
             "n_source": int(n_source),
             "pool_size": int(pool_size),
             "seed": int(seed),
-            "world": world.to_dict(),
+            "world": {k: v for k, v in world.to_dict().items() if k not in NOT_IN_CACHE_KEY},
             "clustering": asdict(clustering),
         },
         sort_keys=True,

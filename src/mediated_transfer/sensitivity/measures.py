@@ -1,0 +1,127 @@
+"""What the study measures per world, from its runs' results: discovery rarity, post-discovery
+learning, and each transfer arm's gain over learning without transfer, with bootstrap
+confidence intervals over seeds (conf/experiment/sensitivity.yaml says why each)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from ..metrics import _median_time as median_time  # a never-reached run counts as +inf
+from ..metrics import time_to_threshold
+from ..results import RunResult
+
+
+@dataclass(frozen=True)
+class Measures:
+    """The study's analysis parameters, fixed with the study (one place)."""
+
+    random_episodes: int = 100_000
+    """Target episodes of the uniformly random policy per world (about a minute each, cached):
+    at today's rate of about 0.2 % that is some 200 successes, and still about 20 at a rate ten
+    times smaller, enough to tell the worlds' rarity apart by a factor of 2."""
+    random_seed: int = 2026
+    """Seed of the random policy's episodes (not a learning seed of any run)."""
+    confidence: float = 0.95
+    resamples: int = 10_000
+    """Bootstrap resamples per interval."""
+    bootstrap_seed: int = 0
+
+
+@dataclass(frozen=True)
+class Interval:
+    value: float
+    low: float
+    high: float
+
+    def contains(self, x: float) -> bool:
+        return self.low <= x <= self.high
+
+
+def learning_span(result: RunResult, threshold: float) -> int | None:
+    """Learning steps from the first rewarded target-task episode to the first evaluation point
+    with <R> >= threshold: how fast the tool skill is learned once discovered. None when the run
+    never gets there (or was never rewarded on a target task)."""
+    first = result.first_target_reward_step
+    reached = next((s for s, r in zip(result.steps, result.mean_reward) if r >= threshold), None)
+    if first is None or reached is None:
+        return None
+    return max(0, int(reached) - int(first))
+
+
+def median_or_none(values: Sequence[int | None]) -> float | None:
+    """Median over runs, a None (never) counted as slower than any value; None if that median
+    is never."""
+    return median_time(list(values))
+
+
+def threshold_time(curves: np.ndarray, steps: Sequence[int], threshold: float, budget: int) -> int:
+    """The paper's time to threshold of the mean curve of ``curves`` (runs x points); the
+    budget when the mean curve never stays above the threshold (a bound, not a time)."""
+    time = time_to_threshold(steps, curves.mean(axis=0), threshold)
+    return budget if time is None else time
+
+
+def ratio_interval(arm: np.ndarray, none: np.ndarray, statistic: Callable[[np.ndarray], float],
+                   measures: Measures) -> Interval:
+    """statistic(arm runs) / statistic(none runs), with its bootstrap confidence interval: runs
+    resampled with replacement within each arm (the arms are independent samples), BCa, and the
+    percentile interval where BCa is undefined (e.g. every resample ties)."""
+    arm, none = np.asarray(arm), np.asarray(none)
+
+    def ratio(i: np.ndarray, j: np.ndarray) -> float:
+        return statistic(arm[i.astype(int)]) / statistic(none[j.astype(int)])
+
+    value = float(ratio(np.arange(len(arm)), np.arange(len(none))))
+    if len(arm) < 2 or len(none) < 2:
+        return Interval(value, math.nan, math.nan)
+    data = (np.arange(len(arm)), np.arange(len(none)))
+    for method in ("BCa", "percentile"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # BCa's degenerate-distribution warning: handled below
+            result = stats.bootstrap(data, ratio, n_resamples=measures.resamples, vectorized=False,
+                                     paired=False, confidence_level=measures.confidence, method=method,
+                                     rng=np.random.default_rng(measures.bootstrap_seed))
+        low, high = result.confidence_interval
+        if np.isfinite(low) and np.isfinite(high):
+            return Interval(value, float(low), float(high))
+    return Interval(value, float(low), float(high))
+
+
+@dataclass(frozen=True)
+class ArmGain:
+    """One transfer arm of one world against that world's runs without transfer."""
+
+    cell: str
+    runs: int
+    reward_loss_mean: float
+    reward_loss_ratio: Interval
+    threshold_time: int
+    threshold_time_ratio: Interval
+    threshold_reached: bool
+    """Whether the arm's mean curve stays above the threshold by the end (else the time is the
+    budget, and the ratio a bound)."""
+
+
+def arm_gain(cell: str, arm: Sequence[RunResult], none: Sequence[RunResult], threshold: float,
+             budget: int, measures: Measures) -> ArmGain:
+    steps = arm[0].steps
+    losses_arm = np.array([r.reward_loss for r in arm])
+    losses_none = np.array([r.reward_loss for r in none])
+    curves_arm = np.array([r.mean_reward for r in arm])
+    curves_none = np.array([r.mean_reward for r in none])
+
+    def time_of(curves: np.ndarray) -> float:
+        return float(threshold_time(curves, steps, threshold, budget))
+
+    time = threshold_time(curves_arm, steps, threshold, budget)
+    return ArmGain(
+        cell=cell, runs=len(arm), reward_loss_mean=float(losses_arm.mean()),
+        reward_loss_ratio=ratio_interval(losses_arm, losses_none, np.mean, measures),
+        threshold_time=time, threshold_time_ratio=ratio_interval(curves_arm, curves_none, time_of, measures),
+        threshold_reached=time_to_threshold(steps, curves_arm.mean(axis=0), threshold) is not None)
