@@ -6,7 +6,9 @@ task until the budget is spent. At evenly spaced points the greedy policy is eva
 fixed set of target tasks; from that curve come the reward loss L_R and the time to threshold.
 
 The loop is written per run but keeps the pieces separate (strategy, learner, environment,
-evaluation), so that several seeds of one table cell can later be stepped side by side.
+evaluation), so that several seeds of one table cell can later be stepped side by side. What
+does not depend on who steps the learner (the seed's streams, the evaluation points, the result)
+is shared with run_sb3.py, where Stable-Baselines3's learners learn in SB3's own loop.
 """
 
 from __future__ import annotations
@@ -239,6 +241,7 @@ class Curve:
         self._mark = time.perf_counter()
 
     def check(self, step: int, learner) -> None:
+        """Record a divergence of ``learner`` found at learning ``step`` as the run's failure."""
         reason = learner.divergence()
         if reason is not None:  # the rest of the budget would only repeat it
             self.failure = f"diverged by step {step}: {reason}"
