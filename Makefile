@@ -3,7 +3,6 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-test
-BENCH_STAMP := $(VENV)/.installed-bench
 
 .DEFAULT_GOAL := help
 .PHONY: help install test bench
@@ -19,16 +18,12 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[test]' torch==2.13.0
 	touch $@
 
-$(BENCH_STAMP): $(STAMP)
-	$(BIN)/pip install --quiet -e '.[test,bench]' torch==2.13.0
-	touch $@
-
 install: $(STAMP) ## Create .venv and install the project with its test extras
 
 test: $(STAMP) ## Run the test suite (creates the environment first)
 	$(BIN)/python -m pytest -q
 
-bench: $(BENCH_STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3
+bench: $(STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3
 	$(BIN)/python -m mediated_transfer.bench
 
 # --- experiments: sweeps, reports, tracking (README: "Reproducing Tables II-IV") ------------

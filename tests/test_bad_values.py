@@ -33,6 +33,8 @@ LEARNERS = {
     "linear_q_rbf": ["algorithm=linear_q", "representation=rbf"],
     "linear_q_fsr": ["algorithm=linear_q", "representation=fsr"],
     "dqn": ["algorithm=dqn", "representation=network"],
+    "sb3_ppo": ["algorithm=sb3_ppo", "representation=network"],
+    "sb3_dqn": ["algorithm=sb3_dqn", "representation=network"],
 }
 BASE = ["scale=smoke", "tracking=none"]
 GROUPS = ("env", "algorithm", "representation", "scale")
@@ -58,7 +60,7 @@ def numeric_keys(learner: str) -> list[str]:
 
 # The learner-independent keys once (with linear_q/rbf), each learner's own keys with it.
 KEYS = [("linear_q_rbf", k) for k in numeric_keys("linear_q_rbf")] + [
-    (learner, k) for learner in ("linear_q_fsr", "dqn") for k in numeric_keys(learner)
+    (learner, k) for learner in ("linear_q_fsr", "dqn", "sb3_ppo", "sb3_dqn") for k in numeric_keys(learner)
     if k.startswith(("algorithm.", "representation."))
 ]
 

@@ -275,7 +275,6 @@ def test_learns_the_chain(seed):
 def test_sb3_twin_computes_the_same_network():
     """The bench compares against SB3 with a features extractor meant to reproduce QNetwork:
     with our weights copied in, it must compute our Q-values."""
-    pytest.importorskip("stable_baselines3")
     import gymnasium
 
     from mediated_transfer.bench.dqn_speed import make_sb3_dqn
@@ -309,7 +308,6 @@ def test_sb3_twin_computes_the_same_network():
 @pytest.mark.slow
 def test_speed_bench_runs_side_by_side():
     """`make bench`'s DQN part end to end on a tiny budget (no timing asserted)."""
-    pytest.importorskip("stable_baselines3")
     from mediated_transfer.bench import dqn_speed
 
     cfg = DQNConfig(buffer_size=1_000, learning_starts=100)

@@ -266,9 +266,9 @@ def test_a_variant_sweep_is_reported_apart_from_the_baseline_and_compared_with_i
 
 
 def test_comments_and_docstrings_do_not_make_results_stale(tmp_path):
-    from mediated_transfer.provenance import PACKAGE, source_digest
+    from mediated_transfer.provenance import COMPUTING_SOURCES, PACKAGE, source_digest
 
-    for entry in ("env", "learners", "transfer", "run.py", "metrics.py", "results.py"):
+    for entry in COMPUTING_SOURCES:
         source = PACKAGE / entry
         target = tmp_path / entry
         if source.is_dir():
@@ -288,12 +288,13 @@ def test_comments_and_docstrings_do_not_make_results_stale(tmp_path):
 def test_a_change_to_one_learner_leaves_the_other_learners_results_current(tmp_path):
     import shutil
 
-    from mediated_transfer.provenance import PACKAGE, source_digest
+    from mediated_transfer.provenance import COMPUTING_SOURCES, PACKAGE, source_digest
 
-    for entry in ("env", "learners", "transfer"):
-        shutil.copytree(PACKAGE / entry, tmp_path / entry, ignore=shutil.ignore_patterns("__pycache__"))
-    for entry in ("run.py", "metrics.py", "results.py"):
-        shutil.copy(PACKAGE / entry, tmp_path / entry)
+    for entry in COMPUTING_SOURCES:
+        if (PACKAGE / entry).is_dir():
+            shutil.copytree(PACKAGE / entry, tmp_path / entry, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy(PACKAGE / entry, tmp_path / entry)
     kernels = tmp_path / "learners" / "dqn_kernels.py"
     kernels.write_text(kernels.read_text().replace("self.adam_steps += 1", "self.adam_steps += 2"))
     assert source_digest(tmp_path, "linear_q") == source_digest(algorithm="linear_q")
@@ -305,6 +306,31 @@ def test_a_change_to_one_learner_leaves_the_other_learners_results_current(tmp_p
     world = tmp_path / "env" / "world.py"
     world.write_text(world.read_text() + "\nCHANGED = 1\n")
     assert source_digest(tmp_path, "linear_q") != source_digest(algorithm="linear_q")
+
+
+def test_the_sb3_learners_code_is_theirs_but_a_representation_is_shared(tmp_path):
+    import shutil
+
+    from mediated_transfer.provenance import COMPUTING_SOURCES, PACKAGE, source_digest
+
+    def changed(*files: str) -> dict[str, bool]:
+        root = tmp_path / "_".join(f.replace("/", "_") for f in files)
+        for entry in COMPUTING_SOURCES:
+            if (PACKAGE / entry).is_dir():
+                shutil.copytree(PACKAGE / entry, root / entry, ignore=shutil.ignore_patterns("__pycache__"))
+            else:
+                shutil.copy(PACKAGE / entry, root / entry)
+        for file in files:
+            (root / file).write_text((root / file).read_text() + "\nCHANGED = 1\n")
+        return {a: source_digest(root, a) != source_digest(algorithm=a)
+                for a in ("linear_q", "dqn", "sb3_ppo", "sb3_dqn")}
+
+    # The SB3 learner, its loop and the wrapper run only for SB3: the other results stay current.
+    for file in ("learners/sb3.py", "run_sb3.py", "transfer/wrapper.py"):
+        assert changed(file) == {"linear_q": False, "dqn": False, "sb3_ppo": True, "sb3_dqn": True}
+    # SB3's networks may learn on the RBF features: the representation counts for them too.
+    assert changed("learners/rbf.py") == {"linear_q": True, "dqn": False, "sb3_ppo": True, "sb3_dqn": True}
+    assert changed("learners/dqn.py") == {"linear_q": False, "dqn": True, "sb3_ppo": False, "sb3_dqn": False}
 
 
 def test_a_sweep_refuses_a_folder_of_another_configuration_before_any_run(root, source_cache):

@@ -22,15 +22,18 @@ RESULTS_FORMAT = 2
 """Version of result.json's layout (2: code version and discovery step recorded)."""
 
 PACKAGE = Path(__file__).resolve().parent
-COMPUTING_SOURCES = ("env", "learners", "transfer", "run.py", "metrics.py", "results.py")
+COMPUTING_SOURCES = ("env", "learners", "transfer", "run.py", "run_sb3.py", "metrics.py", "results.py")
 """What a run's curve depends on, relative to the package."""
+_REPRESENTATION_SOURCES = ("learners/rbf.py", "learners/fsr.py", "learners/_distance_ranges.py")
+_SB3_SOURCES = ("learners/sb3.py", "transfer/wrapper.py", "run_sb3.py", *_REPRESENTATION_SOURCES)
 LEARNER_SOURCES = {
-    "linear_q": ("learners/linear_q.py", "learners/rbf.py", "learners/fsr.py",
-                 "learners/_distance_ranges.py"),
+    "linear_q": ("learners/linear_q.py", *_REPRESENTATION_SOURCES),
     "dqn": ("learners/dqn.py", "learners/dqn_kernels.py"),
+    "sb3_ppo": _SB3_SOURCES,
+    "sb3_dqn": _SB3_SOURCES,
 }
-"""Learner files that only one algorithm runs: a change to the DQN does not make linear
-results stale, nor the other way round."""
+"""Files that only some algorithms run: a change to the DQN does not make linear results stale,
+nor the other way round. A file listed for several algorithms counts for each of them."""
 NOT_COMPUTING = ("env/render.py", "env/animate.py", "env/scripted.py")
 """In the computing folders but never called by a run: drawing, GIFs, scripted policies."""
 
@@ -51,8 +54,10 @@ def source_digest(package: Path = PACKAGE, algorithm: str | None = None) -> str:
     """Digest of the computing sources' syntax trees, without the files only other algorithms
     run: comments, docstrings and layout do not change what a run computes, so they do not
     change the digest."""
-    others = {file for name, files in LEARNER_SOURCES.items() if algorithm is not None
-              and name != algorithm for file in files} | set(NOT_COMPUTING)
+    others = set(NOT_COMPUTING)
+    if algorithm is not None:
+        others |= {file for name, files in LEARNER_SOURCES.items() if name != algorithm for file in files}
+        others -= set(LEARNER_SOURCES.get(algorithm, ()))
     digest = hashlib.sha256()
     for entry in COMPUTING_SOURCES:
         path = package / entry

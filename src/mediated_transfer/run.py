@@ -6,7 +6,9 @@ task until the budget is spent. At evenly spaced points the greedy policy is eva
 fixed set of target tasks; from that curve come the reward loss L_R and the time to threshold.
 
 The loop is written per run but keeps the pieces separate (strategy, learner, environment,
-evaluation), so that several seeds of one table cell can later be stepped side by side.
+evaluation), so that several seeds of one table cell can later be stepped side by side. What
+does not depend on who steps the learner (the seed's streams, the evaluation points, the result)
+is shared with run_sb3.py, where Stable-Baselines3's learners learn in SB3's own loop.
 """
 
 from __future__ import annotations
@@ -25,10 +27,10 @@ from .env.mediated_env import MediatedInteractionEnv
 from .env.task import check_room
 from .learners.base import Learner
 from .provenance import RESULTS_FORMAT, code_version
-from .learners.factory import check_memory, make_learner, validate_learner_choice
+from .learners.factory import SB3_ALGORITHMS, check_memory, make_learner, validate_learner_choice
 from .results import RunResult
 from .transfer.source_tasks import sensor_vectors, source_task_set
-from .transfer.strategies import STRATEGIES, make_strategy
+from .transfer.strategies import STRATEGIES, TransferStrategy, make_strategy, report_episode, start_episode
 
 # Independent random streams of one run, all derived from its seed (never the seed itself:
 # default_rng(seed) is also the source pool's stream when seed == source_set_seed).
@@ -183,44 +185,100 @@ FinishFn = Callable[[Learner], None]
 """Called with the trained learner at the end of the run (e.g. to save it)."""
 
 
+@dataclass
+class RunStreams:
+    """What a run draws from its seed, whichever loop drives its learner: each from its own
+    stream, so that the strategy, the environment and the evaluation are the same for every
+    learner of a seed."""
+
+    learner_seed: int
+    env_seed: int
+    """Seed of the training environment's first reset (its target tasks and action noise)."""
+    strategy: TransferStrategy
+    eval_tasks: list
+    """The evaluation's target tasks: the same for every strategy and N_source of a seed."""
+    eval_seed: int
+    """Seed of the evaluation environment's action noise, at every evaluation point."""
+
+    @classmethod
+    def of(cls, spec: RunSpec) -> "RunStreams":
+        world = spec.world
+        source_tasks = source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
+                                       seed=spec.source_set_seed, cache_dir=spec.cache_dir)
+        strategy = make_strategy(spec.strategy, source_tasks, sensor_vectors(source_tasks, world),
+                                 np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)))
+        eval_tasks = sample_tasks("target", spec.eval_episodes,
+                                  np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)), world)
+        return cls(_stream_seed(spec.seed, _LEARNER_STREAM), _stream_seed(spec.seed, _ENV_STREAM),
+                   strategy, eval_tasks, _stream_seed(spec.seed, _EVAL_NOISE_STREAM))
+
+
+class Curve:
+    """The run's evaluation points as it goes, the learning time between them (evaluation is
+    not learning), and a divergence found at one of them."""
+
+    def __init__(self, spec: RunSpec, streams: RunStreams, on_evaluation: EvaluationFn | None = None):
+        self.every = spec.budget // spec.eval_points
+        self.env = MediatedInteractionEnv("target", spec.world)
+        self.tasks, self.seed, self.on_evaluation = streams.eval_tasks, streams.eval_seed, on_evaluation
+        self.steps: list[int] = []
+        self.rewards: list[float] = []
+        self.success: list[float] = []
+        self.failure: str | None = None
+        self.learn_time = 0.0
+        self.started = self._mark = time.perf_counter()
+
+    def evaluate(self, step: int, learner) -> None:
+        """Evaluate ``learner``'s greedy policy at learning ``step``, then check it for divergence."""
+        self.learn_time += time.perf_counter() - self._mark
+        r, p = evaluate(learner, self.env, self.tasks, self.seed)
+        self.steps.append(step)
+        self.rewards.append(r)
+        self.success.append(p)
+        if self.on_evaluation is not None:
+            self.on_evaluation(step, r, p)
+        self.check(step, learner)
+        self._mark = time.perf_counter()
+
+    def check(self, step: int, learner) -> None:
+        """Record a divergence of ``learner`` found at learning ``step`` as the run's failure."""
+        reason = learner.divergence()
+        if reason is not None:  # the rest of the budget would only repeat it
+            self.failure = f"diverged by step {step}: {reason}"
+
+    def stop(self) -> float:
+        """End the learning time; returns the run's wall time so far."""
+        now = time.perf_counter()
+        self.learn_time += now - self._mark
+        self._mark = now
+        return now - self.started
+
+
 def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_every: int = 0,
                 on_evaluation: EvaluationFn | None = None,
                 on_finish: FinishFn | None = None) -> RunResult:
     """Run one learning run and return its result (the caller writes it). The callbacks see
     the run as it goes; they cannot change what it computes."""
     spec.validate()
-    world = spec.world
-    learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                           spec.representation_params, world=world,
-                           seed=_stream_seed(spec.seed, _LEARNER_STREAM))
-    source_tasks = source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
-                                   seed=spec.source_set_seed, cache_dir=spec.cache_dir)
-    strategy = make_strategy(spec.strategy, source_tasks, sensor_vectors(source_tasks, world),
-                             np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)))
-    # The same evaluation tasks for every strategy and N_source of a seed: shared randomness.
-    eval_tasks = sample_tasks("target", spec.eval_episodes,
-                              np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)), world)
-    eval_seed = _stream_seed(spec.seed, _EVAL_NOISE_STREAM)
-    env = MediatedInteractionEnv("target", world)
-    eval_env = MediatedInteractionEnv("target", world)
-    eval_every = spec.budget // spec.eval_points
-    progress_every = progress_every or eval_every
+    if spec.algorithm in SB3_ALGORITHMS:  # SB3 learns in its own loop (run_sb3.py)
+        from .run_sb3 import execute_sb3_run
 
-    steps: list[int] = []
-    rewards: list[float] = []
-    success: list[float] = []
+        return execute_sb3_run(spec, progress, progress_every, on_evaluation, on_finish)
+    world = spec.world
+    streams = RunStreams.of(spec)
+    learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
+                           spec.representation_params, world=world, seed=streams.learner_seed)
+    strategy = streams.strategy
+    env = MediatedInteractionEnv("target", world)
+    curve = Curve(spec, streams, on_evaluation)
+    progress_every = progress_every or curve.every
+
     source_phase_end: int | None = None
     first_target_reward: int | None = None
-    failure: str | None = None
     step = 0
-    env_seed: int | None = _stream_seed(spec.seed, _ENV_STREAM)
-    learn_time = 0.0
-    started = time.perf_counter()
-    mark = started
-    while step < spec.budget and failure is None:
-        task = strategy.next_task()
-        # Without a task the env samples a target task from its own seeded generator.
-        obs, _ = env.reset(seed=env_seed, options=None if task is None else {"task": task})
+    env_seed: int | None = streams.env_seed
+    while step < spec.budget and curve.failure is None:
+        obs, _, task = start_episode(env, strategy, env_seed)
         env_seed = None
         terminated = False
         while True:
@@ -231,33 +289,28 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
             step += 1
             if reward > 0 and task is None and first_target_reward is None:
                 first_target_reward = step
-            if step % eval_every == 0:
-                learn_time += time.perf_counter() - mark
-                r, p = evaluate(learner, eval_env, eval_tasks, eval_seed)
-                steps.append(step)
-                rewards.append(r)
-                success.append(p)
-                if on_evaluation is not None:
-                    on_evaluation(step, r, p)
-                reason = learner.divergence()
-                if reason is not None:  # the rest of the budget would only repeat it
-                    failure = f"diverged by step {step}: {reason}"
-                mark = time.perf_counter()
+            if step % curve.every == 0:
+                curve.evaluate(step, learner)
             if progress is not None and step % progress_every == 0:
                 progress(step, spec.budget)
-            if terminated or truncated or step >= spec.budget or failure is not None:
+            if terminated or truncated or step >= spec.budget or curve.failure is not None:
                 break
         learner.end_episode()
         if task is not None:
-            strategy.report(solved=bool(terminated))
+            report_episode(strategy, task, solved=bool(terminated))
             if not strategy.in_source_phase:
                 source_phase_end = step
-    learn_time += time.perf_counter() - mark
-    wall = time.perf_counter() - started
+    wall = curve.stop()
     if on_finish is not None:
         on_finish(learner)
+    return run_result(spec, curve, strategy, learner.stats, source_phase_end, first_target_reward, wall)
 
-    rewards_arr = np.asarray(rewards)
+
+def run_result(spec: RunSpec, curve: Curve, strategy: TransferStrategy, learner_stats: dict,
+               source_phase_end: int | None, first_target_reward: int | None, wall: float) -> RunResult:
+    """The RunResult of a finished (or failed) run."""
+    rewards_arr = np.asarray(curve.rewards)
+    failure, world = curve.failure, spec.world
     # A failed run's partial curve has no reward loss or time to threshold: none is made up.
     return RunResult(
         algorithm=spec.algorithm,
@@ -266,17 +319,17 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         n_source=spec.n_source,
         seed=spec.seed,
         budget=spec.budget,
-        steps=steps,
-        mean_reward=rewards,
-        success_rate=success,
+        steps=curve.steps,
+        mean_reward=curve.rewards,
+        success_rate=curve.success,
         reward_loss=math.nan if failure else metrics.reward_loss(rewards_arr, world.success_reward),
-        time_to_threshold=None if failure else metrics.time_to_threshold(steps, rewards_arr, spec.threshold),
+        time_to_threshold=None if failure else metrics.time_to_threshold(curve.steps, rewards_arr, spec.threshold),
         source_phase_end=source_phase_end,
         first_target_reward_step=first_target_reward,
         source_tasks_solved=strategy.solved_count,
         wall_time_s=wall,
-        learning_steps_per_s=spec.budget / learn_time if learn_time > 0 else math.inf,
-        learner_stats=dict(learner.stats),
+        learning_steps_per_s=spec.budget / curve.learn_time if curve.learn_time > 0 else math.inf,
+        learner_stats=dict(learner_stats),
         code=code_version(spec.algorithm),
         results_format=RESULTS_FORMAT,
         failure=failure,

@@ -9,6 +9,8 @@ At the end of a run (``save_learner: true``, the default) the learner is written
   ``torch.load(weights_only=True)``. The replay buffer's transitions are left out (10 MB per run
   at paper scale, not needed to act): the reloaded DQN acts exactly as the trained one, but
   learning on from it would start with an empty buffer.
+- ``learner.pt`` (SB3's PPO and DQN): the policy's tensors, in the same format. The reloaded
+  model acts as the trained one; its optimizer and buffers are not saved (no learning on).
 
 Neither format unpickles objects. Each file also holds ``meta``: a JSON text with the file
 format and the run's ``RunSpec`` (the learner's configuration, the world, the seed), so a file
@@ -45,8 +47,12 @@ class SavedLearnerError(Exception):
     """A folder without a usable saved learner; the message is one line."""
 
 
+TORCH_ALGORITHMS = ("dqn", "sb3_ppo", "sb3_dqn")
+"""Learners whose state is torch tensors (learner.pt); the others' is numpy arrays (learner.npz)."""
+
+
 def learner_file(folder: str | os.PathLike, algorithm: str) -> Path:
-    return Path(folder) / (DQN_FILE if algorithm == "dqn" else LINEAR_FILE)
+    return Path(folder) / (DQN_FILE if algorithm in TORCH_ALGORITHMS else LINEAR_FILE)
 
 
 def save_learner(learner: "Learner", spec: "RunSpec", folder: str | os.PathLike) -> Path:
@@ -54,12 +60,13 @@ def save_learner(learner: "Learner", spec: "RunSpec", folder: str | os.PathLike)
     meta = json.dumps({"format": FORMAT, "spec": asdict(spec)}, sort_keys=True)
     state = learner.state_dict()  # type: ignore[attr-defined]
     path = learner_file(folder, spec.algorithm)
-    if spec.algorithm == "dqn":
+    if spec.algorithm in TORCH_ALGORITHMS:
         import torch
 
-        # clone(): a slice would still carry (and save) the whole storage.
-        state["buffer_transitions"] = state["buffer_transitions"][:0].clone()
-        state["buffer_size"] = state["buffer_position"] = 0
+        if spec.algorithm == "dqn":
+            # clone(): a slice would still carry (and save) the whole storage.
+            state["buffer_transitions"] = state["buffer_transitions"][:0].clone()
+            state["buffer_size"] = state["buffer_position"] = 0
         state["meta"] = meta
         return atomic_write(path, lambda handle: torch.save(state, handle))
     return atomic_write(path, lambda handle: np.savez(handle, meta=np.array(meta), **state))

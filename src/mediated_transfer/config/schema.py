@@ -5,7 +5,8 @@ One place per default, by kind:
 - The world and the learners are used from Python as well (``gymnasium.make``, tests, the
   bench), so their dataclasses hold the defaults and explain them in field docstrings:
   ``WorldConfig`` (env/config.py), ``LinearQConfig`` (learners/linear_q.py), ``RBFConfig``
-  (learners/rbf.py), ``FSRConfig`` (learners/fsr.py), ``DQNConfig`` (learners/dqn.py). They are
+  (learners/rbf.py), ``FSRConfig`` (learners/fsr.py), ``DQNConfig`` (learners/dqn.py),
+  ``SB3PPOConfig`` and ``SB3DQNConfig`` (learners/sb3.py). They are
   the options of the groups ``env``, ``algorithm`` and ``representation`` (registered below;
   there are no YAML copies of them). conf/env/*.yaml are further ``env`` options, the readings
   of the world the paper leaves open: each extends ``default`` and sets only what it changes.
@@ -30,6 +31,7 @@ from ..learners.dqn import DQNConfig
 from ..learners.fsr import FSRConfig
 from ..learners.linear_q import LinearQConfig
 from ..learners.rbf import RBFConfig
+from ..learners.sb3 import SB3DQNConfig, SB3PPOConfig
 
 ROOT_SCHEMA = "run_schema"
 """Name of the root schema in the ConfigStore; conf/config.yaml lists it first."""
@@ -54,6 +56,20 @@ class DQNOption(DQNConfig):
 
 
 @dataclass(frozen=True)
+class SB3PPOOption(SB3PPOConfig):
+    """``algorithm=sb3_ppo``: Stable-Baselines3's PPO (representation network, rbf or fsr)."""
+
+    name: str = "sb3_ppo"
+
+
+@dataclass(frozen=True)
+class SB3DQNOption(SB3DQNConfig):
+    """``algorithm=sb3_dqn``: Stable-Baselines3's DQN (representation network, rbf or fsr)."""
+
+    name: str = "sb3_dqn"
+
+
+@dataclass(frozen=True)
 class RBFOption(RBFConfig):
     """``representation=rbf``: 13829 Gaussian features (Table II)."""
 
@@ -69,15 +85,17 @@ class FSROption(FSRConfig):
 
 @dataclass(frozen=True)
 class NetworkOption:
-    """``representation=network``: the DQN's own features; its architecture keys
-    (hidden_size, num_hidden_layers) are in ``algorithm``."""
+    """``representation=network``: the network learns its own features from the sensor vector;
+    its architecture keys are in ``algorithm`` (dqn: hidden_size, num_hidden_layers; sb3_ppo,
+    sb3_dqn: net_arch)."""
 
     name: str = "network"
 
 
 PYTHON_OPTIONS: dict[str, dict[str, type]] = {
     "env": {"default": WorldConfig},
-    "algorithm": {"linear_q": LinearQOption, "dqn": DQNOption},
+    "algorithm": {"linear_q": LinearQOption, "dqn": DQNOption, "sb3_ppo": SB3PPOOption,
+                  "sb3_dqn": SB3DQNOption},
     "representation": {"rbf": RBFOption, "fsr": FSROption, "network": NetworkOption},
 }
 

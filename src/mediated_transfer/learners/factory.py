@@ -12,20 +12,28 @@ from typing import Any, Mapping
 
 from ..config.mapping import config_from_mapping
 from ..env.config import WorldConfig
-from ..env.task import NUM_DISTANCES, PICKING_LOCATIONS
+from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
 from .base import Learner
 from .dqn import DQNConfig, DQNLearner, ReplayBuffer, layer_shapes
 from .fsr import FSRConfig, FSRRepresentation
 from .linear_q import LinearQConfig, LinearQLearner
 from .rbf import RBFConfig, RBFRepresentation
+from . import sb3
 
 NUM_ACTIONS = len(PICKING_LOCATIONS) + 6  # 5 picks, 4 moves, 2 rotations
 
-ALGORITHMS = ("linear_q", "dqn")
-#: The representations each algorithm can learn on; the DQN learns its own features.
-REPRESENTATIONS = {"linear_q": ("rbf", "fsr"), "dqn": ("network",)}
+SB3_ALGORITHMS = sb3.ALGORITHMS
+"""Stable-Baselines3's learners: they learn in SB3's own loop (run_sb3.py)."""
+ALGORITHMS = ("linear_q", "dqn", *SB3_ALGORITHMS)
+#: The representations each algorithm can learn on; the DQN learns its own features; SB3's
+#: networks learn on the sensor vector itself (network) or on a representation's features.
+REPRESENTATIONS = {"linear_q": ("rbf", "fsr"), "dqn": ("network",),
+                   **{name: sb3.REPRESENTATIONS for name in SB3_ALGORITHMS}}
+#: Where the architecture of a learner with representation=network is configured.
+_ARCHITECTURE_KEYS = {"dqn": "algorithm.hidden_size / algorithm.num_hidden_layers",
+                      **{name: "algorithm.net_arch" for name in SB3_ALGORITHMS}}
 
-_ALGORITHM_CONFIGS = {"linear_q": LinearQConfig, "dqn": DQNConfig}
+_ALGORITHM_CONFIGS = {"linear_q": LinearQConfig, "dqn": DQNConfig, **sb3.CONFIGS}
 _REPRESENTATION_CONFIGS = {"rbf": RBFConfig, "fsr": FSRConfig, "network": None}
 _REPRESENTATIONS = {"rbf": RBFRepresentation, "fsr": FSRRepresentation}
 
@@ -57,7 +65,7 @@ def validate_learner_choice(
         if extra:
             raise ValueError(
                 f"representation={representation} takes no keys (its architecture is in "
-                f"algorithm.hidden_size / algorithm.num_hidden_layers); got {', '.join(extra)}"
+                f"{_ARCHITECTURE_KEYS[algorithm]}); got {', '.join(extra)}"
             )
         rep_config = None
     else:
@@ -67,6 +75,8 @@ def validate_learner_choice(
 
 def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
     """Estimated bytes of a learner's largest arrays (from the configs alone, nothing allocated)."""
+    if algorithm in SB3_ALGORITHMS:
+        return sb3.memory_bytes(algorithm, algo_config, _num_features(rep_config))
     if algorithm == "dqn":
         c = algo_config
         # layer_shapes' first, one repeated and last layer: a list of 10^12 layers would not fit.
@@ -88,6 +98,15 @@ def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
     return features * 8 * NUM_ACTIONS
 
 
+def _num_features(rep_config) -> int:
+    """Length of the feature vector of a representation's config (None: the sensor vector)."""
+    if rep_config is None:
+        return OBSERVATION_SIZE
+    if isinstance(rep_config, RBFConfig):
+        return (rep_config.tool_target_bins + 1) ** 3 * (rep_config.tool_origin_bins + 1) ** 3 + len(PICKING_LOCATIONS)
+    return NUM_DISTANCES * rep_config.distance_bins + 2 * len(PICKING_LOCATIONS)
+
+
 def check_memory(algorithm: str, algo_config, rep_config) -> None:
     """ValueError naming the size key if the learner cannot fit in this machine's memory."""
     needed = memory_bytes(algorithm, algo_config, rep_config)
@@ -95,9 +114,14 @@ def check_memory(algorithm: str, algo_config, rep_config) -> None:
     if needed > total:
         keys = {"dqn": "algorithm.buffer_size, algorithm.batch_size, algorithm.hidden_size, "
                        "algorithm.num_hidden_layers",
+                "sb3_dqn": "algorithm.buffer_size, algorithm.batch_size, algorithm.net_arch",
+                "sb3_ppo": "algorithm.n_steps, algorithm.batch_size, algorithm.net_arch",
                 "rbf": "representation.tool_target_bins, representation.tool_origin_bins",
                 "fsr": "representation.distance_bins"}
-        kind = "dqn" if algorithm == "dqn" else ("rbf" if isinstance(rep_config, RBFConfig) else "fsr")
+        if algorithm in keys:
+            kind = algorithm
+        else:
+            kind = "rbf" if isinstance(rep_config, RBFConfig) else "fsr"
         raise ValueError(
             f"the learner needs ~{_size(needed)} of memory, more than this machine's {_size(total)}: "
             f"reduce {keys[kind]} ({_sizes(kind, algo_config, rep_config)})"
@@ -105,8 +129,10 @@ def check_memory(algorithm: str, algo_config, rep_config) -> None:
 
 
 def _sizes(kind: str, algo_config, rep_config) -> str:
-    config = algo_config if kind == "dqn" else rep_config
+    config = algo_config if kind in ("dqn", *SB3_ALGORITHMS) else rep_config
     names = {"dqn": ("buffer_size", "batch_size", "hidden_size", "num_hidden_layers"),
+             "sb3_dqn": ("buffer_size", "batch_size", "net_arch"),
+             "sb3_ppo": ("n_steps", "batch_size", "net_arch"),
              "rbf": ("tool_target_bins", "tool_origin_bins"), "fsr": ("distance_bins",)}[kind]
     return ", ".join(f"{name}={getattr(config, name)}" for name in names)
 
@@ -132,5 +158,13 @@ def make_learner(
     )
     if algorithm == "dqn":
         return DQNLearner(algo_config, num_actions=NUM_ACTIONS, seed=seed)
-    features = _REPRESENTATIONS[representation](rep_config)
+    features = make_features(representation, rep_config)
+    if algorithm in SB3_ALGORITHMS:
+        # Acts only; run_sb3.py builds its own, on the environment it learns on.
+        return sb3.SB3Learner(algorithm, algo_config, features, world=world, seed=seed)
     return LinearQLearner(algo_config, features, num_actions=NUM_ACTIONS, seed=seed)
+
+
+def make_features(representation: str, rep_config):
+    """The feature map phi(s) of a representation's config; None for ``network`` (no config)."""
+    return None if rep_config is None else _REPRESENTATIONS[representation](rep_config)

@@ -2,10 +2,12 @@
 solved and learning continues on the target task.
 
 A strategy has one job: choose the next source task and hear whether the agent solved it.
-The experiment loop asks ``next_task()`` before every episode: a Task means "learn this source
-task", None means "source phase over, learn the target task" (and stays None). After a source
-episode it calls ``report(solved)``; target episodes are not reported. Learning never stops
-between the phases: the strategy only decides which task an episode starts from.
+Before every episode ``next_task()`` is asked: a Task means "learn this source task", None
+means "source phase over, learn the target task" (and stays None). After a source episode
+``report(solved)`` is called; target episodes are not reported. Learning never stops between
+the phases: the strategy only decides which task an episode starts from. ``start_episode`` and
+``report_episode`` below are that protocol, shared by the experiment loop (run.py) and the
+Gymnasium wrapper (wrapper.py), so both drive a strategy the same way.
 
 - ``none``: no source phase (the paper's "without transfer", N_source = 0).
 - ``regular`` (Algorithm 1, Strategy 1): a uniformly random task of C; removed when solved.
@@ -16,7 +18,8 @@ between the phases: the strategy only decides which task an episode starts from.
 
 from __future__ import annotations
 
-from typing import Protocol, Sequence, runtime_checkable
+import os
+from typing import Any, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -58,6 +61,9 @@ class _SourcePhase:
         # per solved task while sampling happens every episode.
         self._unsolved = list(range(len(self.tasks)))
         self._pending: int | None = None
+        # C lives in the process that made it: a copy in another process (a subprocess vector
+        # env's worker) would run a curriculum of its own. TransferWrapper refuses that.
+        self.owner_pid = os.getpid()
 
     @property
     def n_source(self) -> int:
@@ -175,6 +181,23 @@ class ScaffoldedTransfer(_SourcePhase):
     def _solved(self, index: int) -> None:
         self._solved_mask[index] = True
         self._solved_list.append(index)
+
+
+def start_episode(env, strategy: TransferStrategy, seed: int | None = None) -> tuple[Any, dict, Task | None]:
+    """Reset ``env`` (a target-scenario MediatedInteractionEnv, possibly wrapped) to the episode
+    ``strategy`` chooses: its next source task, or, once C is empty, a target task that ``env``
+    samples from its own seeded generator. Returns (observation, info, task); task is None for
+    a target-task episode."""
+    task = strategy.next_task()
+    observation, info = env.reset(seed=seed, options=None if task is None else {"task": task})
+    return observation, info, task
+
+
+def report_episode(strategy: TransferStrategy, task: Task | None, solved: bool) -> None:
+    """Tell ``strategy`` whether the episode that ``start_episode`` began on ``task`` solved
+    it; a target-task episode (task None) is not reported."""
+    if task is not None:
+        strategy.report(solved=solved)
 
 
 def make_strategy(
