@@ -94,3 +94,9 @@ def test_the_study_sweeps_and_reports_end_to_end(tmp_path):
     path.write_text(report.replace("(not written yet)", "A person's reading."))
     assert sensitivity_main(["--random-episodes=50", "--resamples=100", *common]) == 0
     assert "A person's reading." in path.read_text()
+
+    # The tables' report command skips the study, and named, says where its report comes from.
+    from mediated_transfer.reporting.__main__ import main as reporting_main
+
+    with pytest.raises(SystemExit, match="conf/experiment/sensitivity.yaml says how it is reported"):
+        reporting_main(["experiment=sensitivity", "scale=smoke", f"paths.root={tmp_path}"])

@@ -60,9 +60,8 @@ def build_report(cfg: DictConfig) -> Report:
     if cfg.get("report") is None:
         # ReportError: `reporting` without experiment names skips it (e.g. experiment=sensitivity,
         # whose report is its own command).
-        raise ReportError(f"'{cfg.name}' has no table report section; build reports of a table "
-                          "experiment, e.g. experiment=table2_rbf (another experiment's file says "
-                          "how it is reported)")
+        raise ReportError(f"experiment {cfg.name} has no table report section: "
+                          f"conf/experiment/{cfg.name}.yaml says how it is reported")
     variant = variant_of(cfg)
     cells = finished_runs(cfg)
     metrics_cfg = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))
