@@ -122,7 +122,7 @@ def plot(results: list[WorldResult], study: Study, path: Path) -> Path:
     every world on one picture, the paper's gains as dashed lines."""
     plt = _pyplot()
     from matplotlib.lines import Line2D
-    from matplotlib.ticker import FuncFormatter, NullFormatter, PercentFormatter
+    from matplotlib.ticker import FuncFormatter, PercentFormatter
 
     paper = paper_gains()
     fig, axes = plt.subplots(2, 2, figsize=(12, 9), sharey="row")
@@ -130,7 +130,7 @@ def plot(results: list[WorldResult], study: Study, path: Path) -> Path:
     colors = plt.get_cmap("tab10")
     for row, (what, label) in enumerate([("reward_loss_ratio", "L_R ratio (transfer / none)"),
                                          ("threshold_time_ratio", "time-to-threshold ratio (transfer / none)")]):
-        for col, (x_of, x_label, log) in enumerate([
+        for col, (x_of, x_label, percent) in enumerate([
                 (lambda r: r.random_success, "random policy's success rate on target tasks (discovery rarity)", True),
                 (lambda r: r.learning_median, "median steps from first reward to <R> >= 8, without transfer", False)]):
             ax = axes[row, col]
@@ -142,7 +142,7 @@ def plot(results: list[WorldResult], study: Study, path: Path) -> Path:
                     interval = getattr(gain, what)
                     strategy = cell.split("_")[0]
                     # Scaffolded a little to the right, so both arms of a world stay visible.
-                    shift = 1.0 if strategy == "regular" else (1.06 if log else 1.0 + 0.03)
+                    shift = 1.0 if strategy == "regular" else 1.02
                     err = [[max(0.0, interval.value - interval.low)], [max(0.0, interval.high - interval.value)]]
                     ax.errorbar([x * shift], [interval.value], yerr=err, fmt=markers.get(strategy, "^"),
                                 color=colors(k % 10), capsize=3, alpha=0.9,
@@ -155,10 +155,8 @@ def plot(results: list[WorldResult], study: Study, path: Path) -> Path:
                         ax.text(1.0, value, f" paper {cell}", transform=ax.get_yaxis_transform(),
                                 fontsize=7, va="center", color="0.3")
             ax.axhline(1.0, lw=0.8, color="black")
-            if log:
-                ax.set_xscale("log")
+            if percent:  # rates, on a linear axis (the worlds span a factor of about 4)
                 ax.xaxis.set_major_formatter(PercentFormatter(1.0, decimals=2))
-                ax.xaxis.set_minor_formatter(NullFormatter())
             else:
                 ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v / 1000:.0f}k"))
             ax.set_xlabel(x_label, fontsize=9)
