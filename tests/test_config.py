@@ -300,16 +300,26 @@ def _tuned_files():
     return sorted(p for p in (CONF_DIR / "tuned").glob("*.yaml") if p.stem != "provisional")
 
 
+def _learner_of(stem: str) -> tuple[str, str]:
+    """(algorithm, representation) whose tuned values the file ``stem`` holds: the learner's own
+    file (linear_q_fsr) or an earlier choice kept runnable (linear_q_fsr_round1)."""
+    learners = [(a, r) for a in schema.PYTHON_OPTIONS["algorithm"] for r in schema.PYTHON_OPTIONS["representation"]]
+    matches = [(a, r) for a, r in learners if stem == f"{a}_{r}" or stem.startswith(f"{a}_{r}_")]
+    assert matches, f"conf/tuned/{stem}.yaml names no learner <algorithm>_<representation>"
+    return max(matches, key=lambda m: len(f"{m[0]}_{m[1]}"))
+
+
 @pytest.mark.parametrize("path", _tuned_files(), ids=lambda p: p.stem)
 def test_tuned_values_apply_to_their_learner_only_and_are_searched_keys(path):
     from mediated_transfer.tuning.space import available_learners, load_search_space
 
-    algorithm, representation = path.stem.split("_", 1) if not path.stem.startswith("linear_q") \
-        else ("linear_q", path.stem.removeprefix("linear_q_"))
+    algorithm, representation = _learner_of(path.stem)
     tuned = OmegaConf.to_container(OmegaConf.load(path))
     values = {f"{group}.{key}": v for group, keys in tuned.items() for key, v in keys.items()}
     assert values, f"{path.name} sets no value"
-    learner = compose_config([f"algorithm={algorithm}", f"representation={representation}"])
+    # The learner's own file applies by default; an earlier choice when named (tuned=<stem>).
+    chosen = [] if path.stem == f"{algorithm}_{representation}" else [f"tuned={path.stem}"]
+    learner = compose_config([f"algorithm={algorithm}", f"representation={representation}", *chosen])
     provisional = compose_config([f"algorithm={algorithm}", f"representation={representation}", "tuned=provisional"])
     for key, value in values.items():
         assert OmegaConf.select(learner, key) == value
