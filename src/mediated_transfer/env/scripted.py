@@ -34,6 +34,11 @@ from .task import M1, M2, M3, T, _segment_distance
 _MOVES = (MOVE_OUT, MOVE_IN, MOVE_CCW, MOVE_CW)
 
 
+def _tool_gap(target: np.ndarray, tool: np.ndarray) -> float:
+    """Distance from ``target`` to the nearer arm of the tool at locations ``tool`` (M1, M2, M3)."""
+    return min(_segment_distance(target, tool[M2], tool[M1]), _segment_distance(target, tool[M2], tool[M3]))
+
+
 def _move_direction(point: np.ndarray, action: int, handle: np.ndarray | None = None) -> np.ndarray:
     """Unit direction in which ``action`` moves a picking location at ``point``: in the radial
     frame at ``point``, or, given the tool's ``handle`` direction (M2 -> M1), in the tool frame
@@ -290,8 +295,7 @@ class ScriptedToolPolicy:
             if not self._allowed(locations, step, active):
                 continue
             moved = locations[:3] + step
-            gap = min(_segment_distance(target, moved[M2], moved[M1]),
-                      _segment_distance(target, moved[M2], moved[M3])) - self.contact
+            gap = _tool_gap(target, moved) - self.contact
             radius = float(np.linalg.norm(moved[M1]))
             if gap >= 0.1 and radius < best_radius:
                 best, best_radius = action, radius
@@ -313,9 +317,7 @@ class ScriptedToolPolicy:
             step = self._tool_step(p, action, e)
             if not self._allowed(locations, step, active):
                 continue
-            moved = locations[:3] + step
-            gap = min(_segment_distance(target, moved[M2], moved[M1]),
-                      _segment_distance(target, moved[M2], moved[M3]))
+            gap = _tool_gap(target, locations[:3] + step)
             if gap > best_gap:
                 best, best_gap = action, gap
         return best
