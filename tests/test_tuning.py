@@ -232,3 +232,51 @@ def test_a_trial_stops_when_the_tuning_process_that_started_it_is_gone(monkeypat
     monkeypatch.setattr(objective.os, "getppid", lambda: next(parents))
     with pytest.raises(KeyboardInterrupt, match="launching process is gone"):
         objective.run_seed(["scale=smoke", "tracking=none", "seed=1000"])
+
+
+def test_a_trial_stops_once_its_reward_loss_so_far_exceeds_the_best_and_not_before(space):
+    """The lower bound is exact: (L_R of the seeds done + L_R of the running seed's points so
+    far) / seeds; a ceiling just above the first seed's share stops the trial at the second
+    seed's first point with any loss, and a ceiling the trial stays below changes nothing."""
+    from mediated_transfer.tuning.objective import StoppedEarly, evaluate
+
+    values = dict(space.defaults)
+    full, record = evaluate(space, values)
+    again, same = evaluate(space, values, ceiling=lambda: full + 1e-9)
+    assert again == full and same["curves"] == record["curves"]
+
+    first = record["reward_loss"][0]
+    ceiling = first / 3 + 1e-9
+    with pytest.raises(StoppedEarly) as stop:
+        evaluate(space, values, ceiling=lambda: ceiling)
+    second = record["curves"][1]
+    point = next(i for i, r in enumerate(second) if r < 10.0)  # the first point that adds loss
+    assert (stop.value.seed, stop.value.step) == (1001, record["steps"][point])
+    assert stop.value.lower_bound == pytest.approx((first + sum(10.0 - r for r in second[:point + 1])) / 3)
+    assert stop.value.record["seeds"] == [1000] and stop.value.record["reward_loss"] == [first]
+
+
+def test_a_stopped_trial_counts_toward_the_trials_and_shows_as_a_lower_bound(space, tmp_path, monkeypatch, capsys):
+    # Every random trial meets a best of 0: it stops at its first evaluation point with loss.
+    monkeypatch.setattr(study_module, "best_objective", lambda study: 0.0)
+    fresh_store(tmp_path)
+    assert tune(["rbf", *SMOKE, "--trials", "2", "--root", str(tmp_path)]) == 0
+    trials = _study(space, tmp_path).get_trials()
+    assert [t.state.name for t in trials] == ["COMPLETE", "PRUNED"]  # the defaults are never stopped
+    stopped = trials[1]
+    assert stopped.value == pytest.approx(stopped.user_attrs["stopped_early"]["lower_bound"]) and stopped.value > 0
+    assert stopped.user_attrs["stopped_early"]["seed"] == 1000 and "reward_loss" not in stopped.user_attrs
+    assert re.search(r"trial 1 \(random\): stopped early at seed 1000, step \d+: L_R >= [\d.]+; best",
+                     capsys.readouterr().out)
+
+    csv = pd.read_csv(tmp_path / "tuning" / "rbf" / "smoke" / "trials.csv")
+    assert list(csv["stopped_early"]) == [False, True] and pd.isna(csv.loc[1, "reward_loss.seed_1000"])
+    settings = tracking.TrackingSettings(f"sqlite:///{tmp_path / 'mlflow.db'}")
+    child = next(r for r in tracking.find_runs(settings, mlflow_log.EXPERIMENT)
+                 if r.data.tags.get("tuning_trial") == "1")
+    assert "reward_loss_lower_bound" in child.data.metrics and "stopped_early" in child.data.tags
+
+    assert table1(["--root", str(tmp_path), "--scale", "smoke"]) == 0
+    text = (tmp_path / "reports" / "smoke" / "table1.md").read_text()
+    assert "2 trials finished" in text and "1 of them were stopped early" in text
+    assert "rank 1 of 1 trials run to the end" in text

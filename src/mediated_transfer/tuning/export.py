@@ -1,9 +1,12 @@
 """trials.csv: one row per finished trial, the data behind Table I (committed with the study).
 
 Columns: ``trial``, ``role`` (defaults or random), ``objective`` (mean L_R over the tuning
-seeds), one column per searched key, per-seed diagnostics ``<name>.seed_<k>`` (reward_loss,
+seeds), ``stopped_early`` (true: the trial was stopped once it could not beat the best, and
+``objective`` is a lower bound of its mean L_R; ``stopped_at``: ``<seed>@<step>``), one column
+per searched key, per-seed diagnostics ``<name>.seed_<k>`` (reward_loss,
 first_target_reward_step, first_threshold_step, learning_span, time_to_threshold, final_reward;
-empty: never within the budget), ``duration_s`` and the mean curve ``mean_reward@<step>``.
+empty: never within the budget, or a seed a stopped trial did not finish), ``duration_s`` and
+the mean curve ``mean_reward@<step>`` (trials run to the end).
 Also: a consistent copy of a study's SQLite database while workers keep writing to it.
 """
 
@@ -31,15 +34,19 @@ def trials_frame(study) -> pd.DataFrame:
     from optuna.trial import TrialState
 
     rows = []
-    for trial in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
+    for trial in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE, TrialState.PRUNED)):
         record = trial.user_attrs
-        row = {"trial": trial.number, "role": record.get("role", "random"), "objective": trial.value}
+        stop = record.get("stopped_early")
+        row = {"trial": trial.number, "role": record.get("role", "random"), "objective": trial.value,
+               "stopped_early": stop is not None,
+               "stopped_at": None if stop is None else f"{stop['seed']}@{stop['step']}"}
         row.update(trial.params)
         for name in PER_SEED:
-            row.update({f"{name}.seed_{s}": v for s, v in zip(record["seeds"], record[name])})
+            row.update({f"{name}.seed_{s}": v for s, v in zip(record.get("seeds", []), record.get(name, []))})
         duration = trial.datetime_complete - trial.datetime_start
         row["duration_s"] = round(duration.total_seconds(), 1)
-        row.update({f"mean_reward@{s}": r for s, r in zip(record["steps"], record["mean_curve"])})
+        if stop is None:
+            row.update({f"mean_reward@{s}": r for s, r in zip(record["steps"], record["mean_curve"])})
         rows.append(row)
     frame = pd.DataFrame(rows)
     for column in frame.columns:

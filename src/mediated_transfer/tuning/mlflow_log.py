@@ -2,7 +2,9 @@
 
 A trial's run holds its searched values as params, the objective as ``reward_loss``, the mean
 curve over the tuning seeds as ``mean_reward`` (step = learning step) and the per-seed values
-(``reward_loss.seed_1000``, ``first_target_reward_step.seed_1000``, ...). Runs are keyed by study
+(``reward_loss.seed_1000``, ``first_target_reward_step.seed_1000``, ...); a trial stopped early
+(study.py) holds ``reward_loss_lower_bound`` instead, its finished seeds' values and the tag
+``stopped_early``. Runs are keyed by study
 and trial number and logged once: a study resumed on another machine (or after a crash between
 a trial's end and its logging) logs exactly the finished trials that have no run yet.
 """
@@ -65,17 +67,23 @@ def log_trial(settings: tracking.TrackingSettings, parent_id: str, key: str, tri
     parent = client.get_run(parent_id)
     record: dict[str, Any] = trial.user_attrs
     role = record.get("role", "random")
-    run = client.create_run(parent.info.experiment_id, run_name=f"trial {trial.number} ({role})", tags={
-        "mlflow.parentRunId": parent_id, STUDY_TAG: key, TRIAL_TAG: str(trial.number), "role": role})
-    metrics = [Metric("reward_loss", float(trial.value), 0, 0)]
-    metrics += [Metric("mean_reward", float(r), 0, int(s)) for s, r in zip(record["steps"], record["mean_curve"])]
+    stop = record.get("stopped_early")
+    tags = {"mlflow.parentRunId": parent_id, STUDY_TAG: key, TRIAL_TAG: str(trial.number), "role": role}
+    if stop is not None:
+        tags["stopped_early"] = f"at seed {stop['seed']}, step {stop['step']}"
+    run = client.create_run(parent.info.experiment_id, run_name=f"trial {trial.number} ({role})", tags=tags)
+    metrics = [Metric("reward_loss" if stop is None else "reward_loss_lower_bound", float(trial.value), 0, 0)]
+    seeds = record.get("seeds", [])  # a trial stopped early: the seeds it finished
+    if stop is None:  # the mean curve over the tuning seeds exists only when all ran
+        metrics += [Metric("mean_reward", float(r), 0, int(s)) for s, r in zip(record["steps"], record["mean_curve"])]
     for name in ("reward_loss", "first_target_reward_step", "first_threshold_step", "learning_span",
                  "time_to_threshold", "final_reward"):
         metrics += [Metric(f"{name}.seed_{seed}", float(v), 0, 0)
-                    for seed, v in zip(record["seeds"], record[name]) if v is not None]
+                    for seed, v in zip(seeds, record.get(name, [])) if v is not None]
     params = [Param(k, str(v)) for k, v in trial.params.items()]
-    params.append(Param("seeds", ",".join(str(s) for s in record["seeds"])))
-    params.append(Param("budget", str(record["steps"][-1])))
+    params.append(Param("seeds", ",".join(str(s) for s in seeds)))
+    if "steps" in record:
+        params.append(Param("budget", str(record["steps"][-1])))
     client.log_batch(run.info.run_id, metrics=metrics, params=params)
     client.set_terminated(run.info.run_id, "FINISHED")  # last: an interrupted run is not FINISHED
     return run.info.run_id

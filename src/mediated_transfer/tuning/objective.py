@@ -10,12 +10,18 @@ split shows which of the two a hyperparameter moves.
 A run stopped because its learner diverged (RunResult.failure) scores <R> = 0 at the evaluation
 points it did not reach: a diverged learner has no policy left, and the search should see the
 setting as the bad one it is, not lose the trial.
+
+A trial whose mean L_R can no longer fall below the study's best is stopped early: each
+evaluation point adds R_max - <R> >= 0 to a run's L_R, so the L_R of the seeds done plus the
+partial L_R of the seed running, over the number of seeds, is a lower bound of the trial's
+objective. Once that bound exceeds the best finished trial's objective, the trial cannot be the
+best; the rest of its runs would change nothing the search selects, and cost hours for the DQN.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,7 +30,11 @@ from ..results import RunResult
 from .space import SearchSpace
 
 
-def run_seed(overrides: Sequence[str]) -> tuple[RunResult, float]:
+PartialLossFn = Callable[[int, float], None]
+"""Called at each evaluation point of a run with (learning step, L_R of the points so far)."""
+
+
+def run_seed(overrides: Sequence[str], on_partial_loss: PartialLossFn | None = None) -> tuple[RunResult, float]:
     """Compose the config of one run and execute it; returns its result and its threshold.
 
     The only place where the tuning turns a config into a learning run.
@@ -35,15 +45,21 @@ def run_seed(overrides: Sequence[str]) -> tuple[RunResult, float]:
 
     cfg = compose_config(overrides)
     spec = run_spec(cfg)
+    max_reward = float(cfg.env.success_reward)
     parent = os.getppid()
+    partial = 0.0
 
-    def orphaned(*_point) -> None:
+    def watch(step: int, reward: float, _success: float) -> None:
+        nonlocal partial
         # The study's process was killed: this worker would compute on unseen, for hours.
         if os.getppid() != parent:
             raise KeyboardInterrupt("the tuning's launching process is gone")
+        partial += max_reward - reward
+        if on_partial_loss is not None:
+            on_partial_loss(step, partial)
 
-    result = execute_run(spec, on_evaluation=orphaned)
-    return (_scored_to_the_end(result, spec.budget, spec.eval_points, float(cfg.env.success_reward))
+    result = execute_run(spec, on_evaluation=watch)
+    return (_scored_to_the_end(result, spec.budget, spec.eval_points, max_reward)
             if result.failed else result), float(cfg.threshold)
 
 
@@ -96,11 +112,44 @@ def trial_record(seeds: Sequence[int], results: Sequence[RunResult], threshold: 
     }
 
 
-def evaluate(space: SearchSpace, values: Mapping[str, Any]) -> tuple[float, dict[str, Any]]:
-    """Run a trial with ``values`` at every tuning seed: (mean L_R, the trial's record)."""
-    results, threshold = [], None
-    for seed in space.seeds:
-        result, threshold = run_seed(space.run_overrides(values, seed))
+class StoppedEarly(Exception):
+    """The trial's mean L_R is already above ``ceiling``: it cannot be the study's best."""
+
+    def __init__(self, lower_bound: float, ceiling: float, seed: int, step: int, record: dict[str, Any]):
+        super().__init__(f"mean L_R >= {lower_bound:.1f} > best {ceiling:.1f} at seed {seed}, step {step:,}")
+        self.lower_bound, self.ceiling, self.seed, self.step = lower_bound, ceiling, seed, step
+        self.record = record
+        """trial_record of the seeds finished before the stop ({} when none was)."""
+
+
+CeilingFn = Callable[[], float | None]
+"""The objective a trial must stay below to matter (the study's best so far); None: no limit."""
+
+
+def evaluate(space: SearchSpace, values: Mapping[str, Any],
+             ceiling: CeilingFn | None = None) -> tuple[float, dict[str, Any]]:
+    """Run a trial with ``values`` at every tuning seed: (mean L_R, the trial's record).
+
+    With ``ceiling``, raises StoppedEarly as soon as the trial's lower bound exceeds it.
+    """
+    results: list[RunResult] = []
+    threshold = None
+    count = len(space.seeds)
+
+    def check(seed: int, step: int, loss_so_far: float) -> None:
+        limit = ceiling() if ceiling is not None else None
+        bound = (sum(r.reward_loss for r in results) + loss_so_far) / count
+        if limit is not None and bound > limit:
+            done = space.seeds[:len(results)]
+            raise StoppedEarly(bound, limit, seed, step,
+                               trial_record(done, results, threshold) if results else {})
+
+    for index, seed in enumerate(space.seeds):
+        result, threshold = run_seed(space.run_overrides(values, seed),
+                                     None if ceiling is None else lambda step, loss: check(seed, step, loss))
         results.append(result)
+        if ceiling is not None and index + 1 < count:
+            # A diverged run's missing points (scored 0) are known only at its end.
+            check(seed, result.steps[-1], 0.0)
     record = trial_record(space.seeds, results, threshold)
     return float(np.mean(record["reward_loss"])), record

@@ -6,6 +6,9 @@ Running the same command again continues the study up to its trial count. Worker
 heartbeat; a trial whose worker died (killed, machine lost) is failed after a grace period and
 queued again with the same values, and one interrupted by Ctrl-C is queued again at the next
 launch, so no trial is lost. The provisional defaults are queued as the first trial.
+A random trial that can no longer beat the best finished one is stopped early (objective.py)
+and stored as PRUNED, with its lower bound as its value: it counts toward the trial count, and
+the search selects exactly the trial it would select without stopping any.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from ..progress import duration
 from ..tracking import TrackingSettings
 from . import mlflow_log
 from .export import STUDY_FILE, write_trials_csv
-from .objective import evaluate
+from .objective import StoppedEarly, evaluate
 from .sampler import TrialSeededRandomSampler
 from .space import SearchSpace
 
@@ -139,8 +142,22 @@ def _queue_interrupted(study: optuna.Study) -> None:
             retry(study, trial)
 
 
+FINISHED = (TrialState.COMPLETE, TrialState.PRUNED)
+"""Trials that count toward the study's trial count: run to the end, or stopped early."""
+
+
 def _finished(study: optuna.Study) -> list:
-    return study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+    return study.get_trials(deepcopy=False, states=FINISHED)
+
+
+def _complete(trials: list) -> list:
+    return [t for t in trials if t.state == TrialState.COMPLETE]
+
+
+def best_objective(study: optuna.Study) -> float | None:
+    """The lowest objective of the trials run to the end; None before the first."""
+    values = [t.value for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))]
+    return min(values) if values else None
 
 
 def objective(space: SearchSpace):
@@ -155,7 +172,17 @@ def objective(space: SearchSpace):
                 values[p.key] = trial.suggest_float(p.key, float(p.low), float(p.high), log=p.log)
         if "role" not in trial.user_attrs:
             trial.set_user_attr("role", RANDOM)
-        reward_loss, record = evaluate(space, values)
+        # The defaults run to the end: Table I compares the best with their objective.
+        ceiling = None if trial.user_attrs["role"] == DEFAULTS else (lambda: best_objective(trial.study))
+        try:
+            reward_loss, record = evaluate(space, values, ceiling)
+        except StoppedEarly as stop:
+            for name, value in stop.record.items():
+                trial.set_user_attr(name, value)
+            trial.set_user_attr("stopped_early", {"lower_bound": stop.lower_bound, "best": stop.ceiling,
+                                                  "seed": stop.seed, "step": stop.step})
+            trial.report(stop.lower_bound, step=0)  # Optuna stores it as the PRUNED trial's value
+            raise optuna.TrialPruned(str(stop)) from None
         for name, value in record.items():
             trial.set_user_attr(name, value)
         return reward_loss
@@ -182,9 +209,10 @@ def work(plan: StudyPlan) -> None:
         fail_stale_trials(study)
         trials = study.get_trials(deepcopy=False)
         counts = {s: sum(t.state == s for t in trials) for s in TrialState}
-        if counts[TrialState.COMPLETE] >= plan.trials:
+        finished = counts[TrialState.COMPLETE] + counts[TrialState.PRUNED]
+        if finished >= plan.trials:
             return
-        if counts[TrialState.WAITING] == 0 and counts[TrialState.COMPLETE] + counts[TrialState.RUNNING] >= plan.trials:
+        if counts[TrialState.WAITING] == 0 and finished + counts[TrialState.RUNNING] >= plan.trials:
             time.sleep(POLL_S)
             continue
         try:
@@ -199,7 +227,7 @@ def work(plan: StudyPlan) -> None:
 
 
 def after_trial(plan: StudyPlan, study: optuna.Study, trial, started: float) -> None:
-    if trial.state != TrialState.COMPLETE:
+    if trial.state not in FINISHED:
         return
     finished = _finished(study)
     write_trials_csv(study, plan.folder)
@@ -207,7 +235,7 @@ def after_trial(plan: StudyPlan, study: optuna.Study, trial, started: float) -> 
         key = mlflow_log.study_key(plan.space.learner, plan.space.scale)
         mlflow_log.log_trial(plan.tracking, plan.parent_run_id, key, trial)
         mlflow_log.log_study_progress(plan.tracking, plan.parent_run_id, len(finished),
-                                      min(t.value for t in finished), _defaults_objective(finished))
+                                      best_objective(study), _defaults_objective(finished))
     print(progress_line(plan, trial, finished), flush=True)
 
 
@@ -218,14 +246,18 @@ def _defaults_objective(finished: list) -> float | None:
 
 def progress_line(plan: StudyPlan, trial, finished: list) -> str:
     """``[rbf/paper 5/120, ~1h30m left] trial 4 (random): L_R 150.3 (...); best ...``"""
-    best = min(finished, key=lambda t: t.value)
+    best = min(_complete(finished), key=lambda t: t.value)
     durations = [(t.datetime_complete - t.datetime_start).total_seconds() for t in finished]
     left = max(plan.trials - len(finished), 0) * statistics.median(durations) / plan.workers
-    per_seed = ", ".join(f"{v:.1f}" for v in trial.user_attrs["reward_loss"])
+    per_seed = ", ".join(f"{v:.1f}" for v in trial.user_attrs.get("reward_loss", []))
+    stop = trial.user_attrs.get("stopped_early")
+    result = (f"L_R {trial.value:.1f} (seeds {per_seed})" if stop is None else
+              f"stopped early at seed {stop['seed']}, step {stop['step']:,}: L_R >= {stop['lower_bound']:.1f}"
+              + (f" (seeds done {per_seed})" if per_seed else ""))
     defaults = _defaults_objective(finished)
     return (f"[{plan.name} {len(finished)}/{plan.trials}, ~{duration(left)} left] "
-            f"trial {trial.number} ({trial.user_attrs.get('role')}): L_R {trial.value:.1f} "
-            f"(seeds {per_seed}); best {best.value:.1f} (trial {best.number})"
+            f"trial {trial.number} ({trial.user_attrs.get('role')}): {result}; "
+            f"best {best.value:.1f} (trial {best.number})"
             + ("" if defaults is None else f", defaults {defaults:.1f}"))
 
 

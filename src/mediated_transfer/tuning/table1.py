@@ -4,8 +4,8 @@ Reads the committed ``tuning/<learner>/trials.csv`` of every search space in
 conf/hparams_search/ and writes ``reports/table1.md``: per learner the chosen values (the best
 trial's), the search ranges and why, the trials and tuning seeds, the objective reached and the
 provisional defaults' objective on the same seeds; and ``reports/table1_<learner>.png``: the
-objective against each searched key over all trials (defaults and best marked), and the
-discovery / learning split per seed. Nothing is rerun.
+objective against each searched key over all trials (defaults and best marked; a trial stopped
+early at its lower bound), and the discovery / learning split per seed. Nothing is rerun.
 """
 
 from __future__ import annotations
@@ -28,7 +28,11 @@ TABLE_FILE = "table1.md"
 
 
 def load_trials(path: Path) -> pd.DataFrame:
-    return pd.read_csv(path, dtype={"role": str})
+    trials = pd.read_csv(path, dtype={"role": str})
+    # Studies exported before trials could stop early have no such column: all ran to the end.
+    stopped = trials["stopped_early"] if "stopped_early" in trials else pd.Series(False, index=trials.index)
+    trials["stopped_early"] = stopped.astype(str).str.lower().eq("true")
+    return trials
 
 
 def seed_columns(trials: pd.DataFrame, name: str) -> list[str]:
@@ -39,7 +43,9 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
     title = f"## {space.learner}: " + ", ".join(space.base)
     if trials is None or trials.empty:
         return f"{title}\n\nNot tuned yet: no {TRIALS_FILE}.\n"
-    best = trials.loc[trials["objective"].idxmin()]
+    complete = trials[~trials["stopped_early"]]
+    stopped = len(trials) - len(complete)
+    best = complete.loc[complete["objective"].idxmin()]
     defaults = trials[trials["role"] == DEFAULTS]
     default = defaults.iloc[0] if not defaults.empty else None
     seeds = [c.split("seed_")[1] for c in seed_columns(trials, "reward_loss")]
@@ -48,15 +54,20 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
         f"Random search ({space.path.name}, sampler seed {space.sampler_seed}): {len(trials)} trials "
         f"finished, each {len(seeds)} runs without transfer (tuning seeds {', '.join(seeds)}) at "
         f"{budget:,} learning steps (scale {space.scale}). Objective: mean reward loss L_R over the "
-        "tuning seeds (lower is better).", "",
+        "tuning seeds (lower is better)."
+        + ("" if not stopped else
+           f" {stopped} of them were stopped early, once the L_R of their finished evaluation points "
+           "already exceeded the best finished trial's: their objective is a lower bound, and the "
+           "search selects the same best trial as without stopping."), "",
         f"- Best: L_R {best['objective']:.1f} (trial {int(best['trial'])}; per seed "
         f"{_per_seed(best, 'reward_loss')}).",
     ]
     if default is not None:
         lines.append(f"- Provisional defaults, same seeds: L_R {default['objective']:.1f} (trial "
                      f"{int(default['trial'])}; per seed {_per_seed(default, 'reward_loss')}); "
-                     f"rank {int((trials['objective'] < default['objective']).sum()) + 1} of {len(trials)}.")
-    lines.append(f"- Median trial: L_R {trials['objective'].median():.1f}.")
+                     f"rank {int((complete['objective'] < default['objective']).sum()) + 1} of "
+                     f"{len(complete)} trials run to the end.")
+    lines.append(f"- Median trial run to the end: L_R {complete['objective'].median():.1f}.")
     same = default is not None and int(default["trial"]) == int(best["trial"])
     for label, row in (("best" + (" = defaults" if same else ""), best), ("defaults", None if same else default)):
         if row is not None:
@@ -64,8 +75,8 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
                          f"{_per_seed(row, 'first_target_reward_step', steps=True)}; then to the first "
                          f"<R> >= 8 {_per_seed(row, 'learning_span', steps=True)} steps; time to "
                          f"threshold (stable) {_per_seed(row, 'time_to_threshold', steps=True)}.")
-    discovery = trials[seed_columns(trials, "first_target_reward_step")]
-    if len(trials) > 1 and (discovery.nunique(dropna=False) == 1).all():
+    discovery = complete[seed_columns(complete, "first_target_reward_step")]
+    if len(complete) > 1 and (discovery.nunique(dropna=False) == 1).all():
         # Measured, not assumed: true for a learner whose weights start at 0 and get no update
         # before the first reward (every TD error is 0), so its exploration is the same walk.
         lines.append("- Discovery does not depend on the searched values: on each tuning seed every "
@@ -118,8 +129,9 @@ def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
     columns = 3
     rows = math.ceil(panels / columns)
     fig, axes = plt.subplots(rows, columns, figsize=(4.2 * columns, 3.3 * rows), squeeze=False)
-    best = trials["objective"].idxmin()
+    best = trials.loc[~trials["stopped_early"], "objective"].idxmin()
     defaults = trials.index[trials["role"] == DEFAULTS]
+    stopped = trials["stopped_early"]
     for ax, p in zip(axes.flat, space.params):
         x = trials[p.key]
         if p.kind == "choice":
@@ -132,7 +144,10 @@ def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
         elif p.log:
             ax.set_xscale("log")
             ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels of a short decade overlap
-        ax.scatter(x, trials["objective"], s=14, color="0.5", label="trials")
+        ax.scatter(x[~stopped], trials.loc[~stopped, "objective"], s=14, color="0.5", label="trials")
+        if stopped.any():  # at their lower bound: the true L_R lies at or above the marker
+            ax.scatter(x[stopped], trials.loc[stopped, "objective"], s=18, marker="^", facecolors="none",
+                       edgecolors="0.4", label="stopped early (L_R at least)")
         # Defaults larger and below the best: both stay visible when the defaults are the best.
         ax.scatter(x[defaults], trials.loc[defaults, "objective"], s=160, marker="*", color="tab:red",
                    label="provisional defaults", zorder=3)
