@@ -279,4 +279,4 @@ def test_a_stopped_trial_counts_toward_the_trials_and_shows_as_a_lower_bound(spa
     assert table1(["--root", str(tmp_path), "--scale", "smoke"]) == 0
     text = (tmp_path / "reports" / "smoke" / "table1.md").read_text()
     assert "2 trials finished" in text and "1 of them were stopped early" in text
-    assert "rank 1 of 1 trials run to the end" in text
+    assert "rank 1 of 1 run to the end" in text

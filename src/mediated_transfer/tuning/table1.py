@@ -45,6 +45,7 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
         return f"{title}\n\nNot tuned yet: no {TRIALS_FILE}.\n"
     complete = trials[~trials["stopped_early"]]
     stopped = len(trials) - len(complete)
+    to_the_end = " run to the end" if stopped else ""
     best = complete.loc[complete["objective"].idxmin()]
     defaults = trials[trials["role"] == DEFAULTS]
     default = defaults.iloc[0] if not defaults.empty else None
@@ -66,8 +67,8 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
         lines.append(f"- Provisional defaults, same seeds: L_R {default['objective']:.1f} (trial "
                      f"{int(default['trial'])}; per seed {_per_seed(default, 'reward_loss')}); "
                      f"rank {int((complete['objective'] < default['objective']).sum()) + 1} of "
-                     f"{len(complete)} trials run to the end.")
-    lines.append(f"- Median trial run to the end: L_R {complete['objective'].median():.1f}.")
+                     f"{len(complete)}{to_the_end}.")
+    lines.append(f"- Median trial{to_the_end}: L_R {complete['objective'].median():.1f}.")
     same = default is not None and int(default["trial"]) == int(best["trial"])
     for label, row in (("best" + (" = defaults" if same else ""), best), ("defaults", None if same else default)):
         if row is not None:
