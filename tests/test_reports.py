@@ -3,6 +3,8 @@ curves, so every number in the table can be checked by hand."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import csv
 import io
 import subprocess
@@ -279,9 +281,39 @@ def test_compare_writes_one_table_and_one_figure_of_both_sweeps(two_sweeps, caps
     assert float(none[f"reward_loss_difference [{LAMBDA}]"]) == -1.0
     assert rows["regular", "50"][f"runs [{LAMBDA}]"] == "0" and rows["regular", "50"][f"reward_loss_mean [{LAMBDA}]"] == ""
     assert _row(md.read_text(), "without transfer", 0) == [
-        "without transfer", "0", "2/2", "12.00 ± 2.00", "-", "2/2", "11.00 ± 1.00", "-", "-1.00 ± 2.24"]
+        "without transfer", "0", "2/2", "12.00 ± 2.00", "-", "never / never",
+        "2/2", "11.00 ± 1.00", "-", "never / never", "-1.00 ± 2.24"]
     with Image.open(png) as image:
         assert image.format == "PNG"
+
+
+def test_compare_on_the_seeds_given_with_the_discovery_learning_split(tmp_path, capsys):
+    sweep_dir = Path(compose_experiment(tmp_path).paths.sweep_dir)
+    # (curve at steps 100 and 200, first rewarded target episode): learning = first <R> >= 8 - discovery
+    runs = {"": [([2.0, 9.0], 50), ([8.0, 9.0], 20), ([0.0, 0.0], None)],  # learning 150, 80, never
+            LAMBDA: [([9.0, 9.0], 10), ([0.0, 8.0], 150)]}                  # learning 90, 50
+    for variant, seeds in runs.items():
+        for seed, (curve, discovery) in enumerate(seeds):
+            result = dataclasses.replace(synthetic_result("none", 0, seed, curve, (100, 200)),
+                                         first_target_reward_step=discovery)
+            result.write(sweep_dir / "none_0" / f"seed={seed}" / variant)
+
+    assert compare_main([*reporting_args(tmp_path), "--variant", LAMBDA]) == 0
+    out = tmp_path / "reports" / "smoke" / "compare"
+    row = _row((out / f"table2_rbf__baseline__vs__{LAMBDA}.md").read_text(), "without transfer", 0)
+    assert row[2] == "3/2" and row[5] == "50 / 150"  # the never-rewarded run counts as slowest
+
+    assert compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", "0-1"]) == 0
+    md = out / f"table2_rbf__baseline__vs__{LAMBDA}__seeds_0-1.md"
+    assert str(md) in capsys.readouterr().out
+    row = _row(md.read_text(), "without transfer", 0)
+    assert row[2:6] == ["2/2", "6.00 ± 3.00", "200", "35 / 115"]  # seeds 0 and 1 only
+    assert row[6:] == ["2/2", "7.00 ± 5.00", "200", "80 / 70", "+1.00 ± 5.83"]
+    for bad in ("9-x", "-1"):
+        with pytest.raises(SystemExit, match=r"^error: --seeds .*give a range like 0-9"):
+            compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", bad])
+    with pytest.raises(SystemExit, match=r"^error: --seeds 7: baseline has no finished run of these seeds$"):
+        compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", "7"])
 
 
 def test_compare_of_a_variant_without_runs_names_the_variants_present(two_sweeps):

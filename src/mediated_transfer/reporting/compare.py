@@ -1,12 +1,15 @@
 """``python -m mediated_transfer.reporting.compare experiment=table2_rbf [scale=smoke] [overrides]
---variant "algorithm.lambda_=0.5" [--variant "..." ...] [--no-baseline]``
+--variant "algorithm.lambda_=0.5" [--variant "..." ...] [--no-baseline] [--seeds 0-9]``
 
 Compares sweeps of one experiment side by side: the baseline (the experiment with the shared
 overrides) first, unless --no-baseline, then each --variant (space-separated Hydra overrides,
 added to the shared ones). Writes one table (Markdown, CSV) with a row per table cell and, per
-sweep, its runs, reward loss L_R and time to threshold, and each sweep's L_R minus the first's;
-and one figure, L_R per table cell with a bar per sweep; to
+sweep, its runs, reward loss L_R, time to threshold and discovery / learning split, and each
+sweep's L_R minus the first's; and one figure, L_R per table cell with a bar per sweep; to
 <paths.reports_dir>/compare/<experiment>__<first>__vs__<second>[__vs__...].{md,csv,png}.
+With --seeds, every sweep counts only its runs of those seeds (e.g. a variant run on seeds 0-9
+against a baseline of 20), so the sweeps are compared on the same seeds; the files' names end
+in ``__seeds_<first>-<last>``.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from ..metrics import MetricsConfig
 from .build import finished_runs, path_name
 from .collect import summaries as cell_summaries
 from .collect import variant_label
-from .comparison import Sweep, compared_cells, numbers, preamble, reward_loss_bars, shown
+from .comparison import Split, Sweep, compared_cells, numbers, preamble, reward_loss_bars, shown
 from .compose import (USER_ERRORS, ReportError, compose_experiment, experiment_names, one_line,
                       split_experiments, variant_of)
 from .figures import plot_loss_bars
@@ -44,9 +47,11 @@ class Comparison:
         return f"{what} -> {', '.join(map(str, self.files))}"
 
 
-def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], baseline: bool = True) -> Comparison:
+def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], baseline: bool = True,
+            seeds: Sequence[int] | None = None) -> Comparison:
     """Table and figure of the sweeps of ``experiment``: the baseline (unless not ``baseline``),
-    then each of ``variants`` (space-separated overrides), all with the ``shared`` overrides."""
+    then each of ``variants`` (space-separated overrides), all with the ``shared`` overrides;
+    with ``seeds``, of the runs of those seeds only."""
     configs = ([compose_experiment(experiment, shared)] if baseline else []) + [
         compose_experiment(experiment, [*shared, *_overrides(v)]) for v in variants]
     if len(configs) < 2:
@@ -57,14 +62,15 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
         if name in names[:i]:
             raise ReportError(f"--variant {variants[i - int(baseline)]!r}: the same sweep as "
                               f"{variant_label(name)!r} (Hydra names both {name!r}); compare different sweeps")
-    sweeps = [_sweep(cfg) for cfg in configs]
+    sweeps = [_sweep(cfg, seeds) for cfg in configs]
 
     first = configs[0]
     table = str(first.name)
     cells = compared_cells(sweeps, paper_rows(str(first.report.paper_table)))
     out = Path(first.paths.reports_dir) / "compare"
     out.mkdir(parents=True, exist_ok=True)
-    stem = f"{path_name(table)}__" + "__vs__".join(path_name(s.label) for s in sweeps)
+    stem = f"{path_name(table)}__" + "__vs__".join(path_name(s.label) for s in sweeps) + (
+        "" if seeds is None else f"__seeds_{_seeds_text(seeds)}")
     title = str(first.report.title)
     notes = preamble(table, title, str(first.scale.name), float(first.threshold),
                      float(first.env.success_reward), sweeps)
@@ -87,12 +93,42 @@ def _overrides(variant: str) -> list[str]:
         raise ReportError(f"--variant {variant!r}: {error}; give space-separated overrides") from None
 
 
-def _sweep(cfg: DictConfig) -> Sweep:
+def _sweep(cfg: DictConfig, seeds: Sequence[int] | None) -> Sweep:
     cells = finished_runs(cfg)
-    metrics = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))
+    if seeds is not None:
+        for cell in cells.values():
+            cell.results = [r for r in cell.results if r.seed in seeds]
+        cells = {name: c for name, c in cells.items() if c.results}
+        if not cells:
+            raise ReportError(f"--seeds {_seeds_text(seeds)}: {variant_label(variant_of(cfg))} has no "
+                              "finished run of these seeds")
+    threshold = float(cfg.threshold)
+    metrics = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=threshold)
     return Sweep(variant_of(cfg), cell_summaries(cells, metrics),
-                 {name: (c.strategy, c.n_source) for name, c in cells.items()}, int(cfg.scale.seeds),
-                 int(cfg.scale.budget), int(cfg.scale.eval_points))
+                 {name: (c.strategy, c.n_source) for name, c in cells.items()},
+                 int(cfg.scale.seeds) if seeds is None else len(seeds),
+                 int(cfg.scale.budget), int(cfg.scale.eval_points),
+                 {name: Split.of(c, threshold) for name, c in cells.items() if c.results})
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``0-9`` or ``0,3,5``: the seeds; a one-line error otherwise."""
+    try:
+        if "-" in text:
+            first, last = (int(x) for x in text.split("-", 1))
+            seeds = list(range(first, last + 1))
+        else:
+            seeds = [int(x) for x in text.split(",")]
+    except ValueError:
+        seeds = []
+    if not seeds or min(seeds) < 0:
+        raise ReportError(f"--seeds {text!r}: give a range like 0-9 or a list like 0,3,5 of seeds >= 0")
+    return sorted(set(seeds))
+
+
+def _seeds_text(seeds: Sequence[int]) -> str:
+    contiguous = len(seeds) > 1 and list(seeds) == list(range(seeds[0], seeds[-1] + 1))
+    return f"{seeds[0]}-{seeds[-1]}" if contiguous else ",".join(map(str, seeds))
 
 
 class _Parser(argparse.ArgumentParser):
@@ -108,13 +144,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--variant", action="append", default=[], metavar="OVERRIDES",
                         help="a sweep to compare: space-separated overrides (repeatable)")
     parser.add_argument("--no-baseline", action="store_true", help="compare the variants only")
+    parser.add_argument("--seeds", default=None, help="only the runs of these seeds: 0-9 or 0,3,5")
     args = parser.parse_intermixed_args(sys.argv[1:] if argv is None else list(argv))
     try:
         experiments, shared = split_experiments(args.overrides)
         if len(experiments) != 1:
             raise ReportError(f"experiment: name the one experiment to compare (got "
                               f"{', '.join(experiments) or 'none'}); allowed: {', '.join(experiment_names())}")
-        comparison = compare(experiments[0], shared, args.variant, not args.no_baseline)
+        seeds = None if args.seeds is None else parse_seeds(args.seeds)
+        comparison = compare(experiments[0], shared, args.variant, not args.no_baseline, seeds)
     except USER_ERRORS as error:
         raise SystemExit(f"error: {one_line(error)}") from None
     print(f"{experiments[0]}: {comparison.line()}")

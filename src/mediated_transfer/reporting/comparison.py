@@ -1,7 +1,8 @@
 """Sweeps of one experiment side by side (the baseline and its variants): per table cell, each
-sweep's runs, reward loss L_R (mean +/- SEM) and time to threshold, and how far each sweep's L_R
-lies from the first sweep's. One pandas DataFrame of texts (Markdown), one of numbers (CSV), and
-the bars of the figure.
+sweep's runs, reward loss L_R (mean +/- SEM), time to threshold, the discovery / learning split
+(median step of the first rewarded target-task episode, and median steps from there to the first
+<R> >= threshold), and how far each sweep's L_R lies from the first sweep's. One pandas DataFrame
+of texts (Markdown), one of numbers (CSV), and the bars of the figure.
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from .collect import variant_label
+from ..sensitivity.measures import learning_span, median_or_none
+from .collect import CellRuns, variant_label
 from .figures import Bars
 from .formats import MARKDOWN
 from .paper import SCHEMES, PaperRow
@@ -30,6 +32,8 @@ class Sweep:
     expected_runs: int
     budget: int
     eval_points: int
+    splits: dict[str, "Split"]
+    """cell -> its runs' discovery / learning split."""
 
     @property
     def label(self) -> str:
@@ -38,6 +42,24 @@ class Sweep:
     @property
     def runs(self) -> int:
         return sum(int(s["n_runs"]) for s in self.summaries.values())
+
+
+@dataclass(frozen=True)
+class Split:
+    """When the runs of a cell first solved a target task by chance (discovery), and how long
+    they then took to learn the tool skill (learning): medians over runs, a run that never got
+    there counted as slower than any that did; None when at least half never did."""
+
+    discovery: float | None
+    learning: float | None
+
+    @classmethod
+    def of(cls, cell: CellRuns, threshold: float) -> "Split":
+        return cls(median_or_none([r.first_target_reward_step for r in cell.results]),
+                   median_or_none([learning_span(r, threshold) for r in cell.results]))
+
+    def text(self) -> str:
+        return " / ".join("never" if v is None else f"{v:,.0f}" for v in (self.discovery, self.learning))
 
 
 def compared_cells(sweeps: list[Sweep], paper: list[PaperRow]) -> list[tuple[str, int]]:
@@ -72,6 +94,8 @@ def shown(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
             for x in summaries]
         columns[f"Time to threshold ({sweep.label})"] = [
             "" if x is None else steps_text(x["time_to_threshold"]) for x in summaries]
+        columns[f"Discovery / learning ({sweep.label})"] = [
+            "" if f"{s}_{n}" not in sweep.splits else sweep.splits[f"{s}_{n}"].text() for s, n in cells]
         if sweep is not first:
             differences = [reward_loss_difference(x, first.summaries.get(f"{s}_{n}"))
                            for x, (s, n) in zip(summaries, cells)]
@@ -94,6 +118,9 @@ def numbers(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
         frame["reward_loss_mean" + tag] = pd.array([x.get("reward_loss_mean") for x in summaries], "Float64")
         frame["reward_loss_sem" + tag] = pd.array([x.get("reward_loss_sem") for x in summaries], "Float64")
         frame["time_to_threshold" + tag] = pd.array([x.get("time_to_threshold") for x in summaries], "Int64")
+        splits = [sweep.splits.get(f"{s}_{n}") for s, n in cells]
+        frame["discovery_median" + tag] = pd.array([x and x.discovery for x in splits], "Float64")
+        frame["learning_median" + tag] = pd.array([x and x.learning for x in splits], "Float64")
         if sweep is not first:
             differences = [reward_loss_difference(x or None, first.summaries.get(f"{s}_{n}"))
                            for x, (s, n) in zip(summaries, cells)]
@@ -133,5 +160,8 @@ def preamble(table: str, title: str, scale: str, threshold: float, max_reward: f
         f"{m.reward_loss}: reward loss, mean {m.pm} SEM over runs (lower is better). ΔL_R: a sweep's "
         f"{m.reward_loss} minus that of {m.code(first.label)}, {m.pm} both SEMs combined as for independent "
         f"runs. Time to threshold: learning steps until the mean curve stays at {m.reward} {m.geq} "
-        f"{threshold:g} to the end; '-': never.",
+        f"{threshold:g} to the end; '-': never. Discovery / learning: median learning step of the "
+        f"first rewarded target-task episode / median steps from there to the first {m.reward} {m.geq} "
+        f"{threshold:g}, over runs (a run that never got there counts as slower than any; 'never': "
+        "half or more never did).",
     ]
