@@ -177,7 +177,8 @@ def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
     fig.colorbar(points, ax=ax, label="L_R of the trial")
     ax.set_xlabel("discovery: first rewarded target episode (step)")
     ax.set_ylabel("learning: then to first <R> >= 8 (steps)")
-    ax.set_title(f"per seed: {int(np.isnan(discovery).sum())} of {shown.size} never rewarded, "
+    ran = ~np.isnan(trials[seed_columns(trials, "reward_loss")].to_numpy(dtype=float))  # not: seeds a stopped trial skipped
+    ax.set_title(f"per run: {int((np.isnan(discovery) & ran).sum())} of {int(ran.sum())} never rewarded, "
                  f"{int(stuck.sum())} rewarded but never <R> >= 8", fontsize=8)
     for ax in list(axes.flat)[panels:]:
         ax.axis("off")
