@@ -45,8 +45,9 @@ GRACE_S = 60
 """... and counts as dead (failed, then queued again) after this long without one."""
 POLL_S = 5
 """A worker with nothing to start checks this often whether the others' trials finished or died."""
-MAX_RETRIES = 3
-"""A trial is redone at most this often (a trial that keeps failing is a bug to look at)."""
+MAX_RETRIES = 10
+"""A trial is redone at most this often (a trial that keeps failing is a bug to look at). Not
+fewer: a DQN trial can outlast several working sessions' ends, each of which interrupts it."""
 DEFAULTS, RANDOM = "defaults", "random"
 """The role of a trial: the provisional defaults (queued first) or a random draw."""
 
