@@ -157,7 +157,7 @@ def _complete(trials: list) -> list:
 
 def best_objective(study: optuna.Study) -> float | None:
     """The lowest objective of the trials run to the end; None before the first."""
-    values = [t.value for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))]
+    values = [t.value for t in _complete(_finished(study))]
     return min(values) if values else None
 
 
@@ -210,7 +210,7 @@ def work(plan: StudyPlan) -> None:
         fail_stale_trials(study)
         trials = study.get_trials(deepcopy=False)
         counts = {s: sum(t.state == s for t in trials) for s in TrialState}
-        finished = counts[TrialState.COMPLETE] + counts[TrialState.PRUNED]
+        finished = sum(counts[s] for s in FINISHED)
         if finished >= plan.trials:
             return
         if counts[TrialState.WAITING] == 0 and finished + counts[TrialState.RUNNING] >= plan.trials:
