@@ -121,8 +121,7 @@ def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, var
         result.write(folder)
     except BaseException as error:
         if live is not None:
-            # Ctrl-C, SIGTERM (a scheduler's kill, a timeout): KILLED; anything else: FAILED.
-            live.end("KILLED" if isinstance(error, (KeyboardInterrupt, SystemExit)) else "FAILED")
+            live.end(tracking.stopped_status(error))
         raise
     if live is not None:
         live.finish(result, _artifacts(folder))

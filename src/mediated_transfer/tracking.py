@@ -369,12 +369,17 @@ def _create(client, experiment_id, key, run_name, metrics, params, tags, artifac
             client.log_batch(run_id, params=params_list[i:i + _BATCH["params"]])
         _log_artifacts(client, run_id, artifacts)
     except BaseException as error:  # interrupted while logging: not left RUNNING; a rerun redoes it
-        client.set_terminated(run_id, "KILLED" if isinstance(error, (KeyboardInterrupt, SystemExit))
-                              else "FAILED")
+        client.set_terminated(run_id, stopped_status(error))
         raise
     # The status last: a run interrupted before this line is recognised and redone.
     client.set_terminated(run_id, "FAILED" if "failure" in tags else "FINISHED")
     return run_id
+
+
+def stopped_status(error: BaseException) -> str:
+    """MLflow status of a run stopped by ``error``: Ctrl-C or SIGTERM (a scheduler's kill, a
+    timeout) is KILLED; anything else FAILED."""
+    return "KILLED" if isinstance(error, (KeyboardInterrupt, SystemExit)) else "FAILED"
 
 
 def _log_artifacts(client, run_id: str, artifacts: Iterable[Path]) -> None:
