@@ -454,25 +454,51 @@ def test_a_run_claimed_by_another_process_is_skipped_at_once(root, source_cache,
     assert not tracking.find_runs(_settings(root), "table2_rbf")
 
 
-def test_a_run_whose_launcher_is_killed_stops_instead_of_running_on_orphaned(root, source_cache):
-    """SIGKILL of the launching process: its run notices at the next evaluation point, stops
-    (MLflow: KILLED) and writes nothing, instead of computing on unseen."""
-    import signal
-    import subprocess
-    import time
+def test_a_parallel_sweeps_runs_stop_when_its_launcher_is_killed(root, source_cache):
+    """SIGKILL of the launcher of a parallel sweep: each worker's run notices at its next
+    evaluation point, stops (MLflow: KILLED) and writes nothing, instead of computing on unseen."""
+    command = [sys.executable, "-m", "mediated_transfer", "-m", "cell=none_0", "seed=0,1", "hydra.launcher.n_jobs=2",
+               *_common(root, source_cache), "scale.budget=4000000", "scale.eval_points=400"]
+    launcher = subprocess.Popen(command, cwd=CONF_DIR.parent, start_new_session=True,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 180
+        while len(tracking.find_runs(_settings(root), "linear_q_rbf")) < 2 and time.time() < deadline:
+            time.sleep(0.5)
+        launcher.kill()
+        launcher.wait()
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            runs = tracking.find_runs(_settings(root), "linear_q_rbf")
+            if runs and all(r.info.status != "RUNNING" for r in runs):
+                break
+            time.sleep(0.5)
+        else:
+            pytest.fail("the orphaned workers' runs kept running")
+    finally:
+        try:
+            os.killpg(launcher.pid, signal.SIGKILL)  # the workers too, whatever happened
+        except ProcessLookupError:
+            pass
+    assert [r.info.status for r in runs] == ["KILLED", "KILLED"]
+    assert not list(root.rglob("result.json"))
 
+
+def test_a_run_started_in_the_background_finishes_after_its_shell_exits(root, source_cache):
+    """`nohup python -m mediated_transfer ... &` from a shell that exits while the run computes:
+    the run is re-parented and goes on to the end (only a pool's worker watches its launcher)."""
     command = " ".join([sys.executable, "-m", "mediated_transfer", "cell=none_0", "seed=0",
-                        *_common(root, source_cache), "scale.budget=4000000", "scale.eval_points=400"])
-    launcher = subprocess.Popen(["bash", "-c", f"{command} & echo $! && wait"], stdout=subprocess.PIPE,
-                                stderr=subprocess.DEVNULL, text=True)
-    run_pid = int(launcher.stdout.readline())
+                        *_common(root, source_cache), "scale.budget=200000", "scale.eval_points=40"])
+    shell = subprocess.Popen(["bash", "-c", f"{command} >/dev/null 2>&1 & echo $! && sleep 600"],
+                             cwd=CONF_DIR.parent, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    run_pid = int(shell.stdout.readline())
     try:
         deadline = time.time() + 120
         while not tracking.find_runs(_settings(root), "linear_q_rbf") and time.time() < deadline:
             time.sleep(0.5)
-        launcher.send_signal(signal.SIGKILL)
-        launcher.wait()
-        deadline = time.time() + 60
+        shell.kill()  # the shell is gone while the run computes
+        shell.wait()
+        deadline = time.time() + 300
         while time.time() < deadline:
             try:
                 os.kill(run_pid, 0)
@@ -480,15 +506,16 @@ def test_a_run_whose_launcher_is_killed_stops_instead_of_running_on_orphaned(roo
                 break
             time.sleep(0.2)
         else:
-            pytest.fail("the orphaned run kept running")
+            pytest.fail("the run did not end")
     finally:
         try:
             os.kill(run_pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
+    [result] = (root / "runs").rglob("result.json")
+    assert RunResult.read(result.parent).steps[-1] == 200000
     [run] = tracking.find_runs(_settings(root), "linear_q_rbf")
-    assert run.info.status == "KILLED"
-    assert not list(root.rglob("result.json"))
+    assert run.info.status == "FINISHED"
 
 
 @pytest.mark.parametrize("sweep", [False, True])

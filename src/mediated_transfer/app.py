@@ -29,6 +29,7 @@ from .claim import claimed
 from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
 from .config.spec import check_same_run, run_spec
 from .identity import run_name, run_tags
+from .orphan import launcher_watch
 from .results import RunResult
 from .sweep import preflight
 
@@ -102,14 +103,14 @@ def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, var
         except Exception as error:  # noqa: BLE001 - the store failed after the sweep's check
             log.warning("%s: not followed in MLflow (%s: %s); rerunning the sweep logs it",
                         folder, type(error).__name__, first_line(error))
-    parent = os.getppid()
+    orphaned = launcher_watch()
 
     def evaluated(step: int, mean_reward: float, success_rate: float) -> None:
         if watch is not None:
             watch.evaluated(step, mean_reward, success_rate)
         if live is not None:
             live.evaluation(step, mean_reward, success_rate)
-        if os.getppid() != parent:
+        if orphaned():
             # The launcher died (e.g. SIGKILL): nobody collects this run; a rerun redoes it.
             raise KeyboardInterrupt("the launching process is gone")
 

@@ -20,12 +20,12 @@ best; the rest of its runs would change nothing the search selects, and cost hou
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
+from ..orphan import launcher_watch
 from ..results import RunResult
 from .space import SearchSpace
 
@@ -46,13 +46,13 @@ def run_seed(overrides: Sequence[str], on_partial_loss: PartialLossFn | None = N
     cfg = compose_config(overrides)
     spec = run_spec(cfg)
     max_reward = float(cfg.env.success_reward)
-    parent = os.getppid()
+    orphaned = launcher_watch()
     partial = 0.0
 
     def watch(step: int, reward: float, _success: float) -> None:
         nonlocal partial
         # The study's process was killed: this worker would compute on unseen, for hours.
-        if os.getppid() != parent:
+        if orphaned():
             raise KeyboardInterrupt("the tuning's launching process is gone")
         partial += max_reward - reward
         if on_partial_loss is not None:

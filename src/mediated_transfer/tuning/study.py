@@ -14,7 +14,6 @@ the search selects exactly the trial it would select without stopping any.
 from __future__ import annotations
 
 import multiprocessing
-import os
 import statistics
 import time
 import warnings
@@ -25,6 +24,7 @@ import optuna
 from optuna.storages import RDBStorage, RetryHeartbeatStaleTrialCallback, fail_stale_trials
 from optuna.trial import TrialState
 
+from ..orphan import launcher_watch
 from ..progress import duration
 from ..tracking import TrackingSettings
 from . import mlflow_log
@@ -203,9 +203,9 @@ def work(plan: StudyPlan) -> None:
     threadpool_limits(limits=1)  # one worker, one core
     study = load_study(plan)
     started = time.time()
-    parent = os.getppid()
+    orphaned = launcher_watch()
     while True:
-        if os.getppid() != parent:
+        if orphaned():
             return  # the study's process was killed: an orphaned worker stops (a trial it ran stops itself)
         fail_stale_trials(study)
         trials = study.get_trials(deepcopy=False)
