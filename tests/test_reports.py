@@ -279,19 +279,21 @@ def test_compare_writes_one_table_and_one_figure_of_both_sweeps(two_sweeps, caps
     none = rows["none", "0"]
     assert float(none["reward_loss_mean [baseline]"]) == 12.0 and float(none[f"reward_loss_mean [{LAMBDA}]"]) == 11.0
     assert float(none[f"reward_loss_difference [{LAMBDA}]"]) == -1.0
+    assert none["loss_after_learning_mean [baseline]"] == ""  # no run reached <R> >= 8
     assert rows["regular", "50"][f"runs [{LAMBDA}]"] == "0" and rows["regular", "50"][f"reward_loss_mean [{LAMBDA}]"] == ""
     assert _row(md.read_text(), "without transfer", 0) == [
-        "without transfer", "0", "2/2", "12.00 ± 2.00", "-", "never / never",
-        "2/2", "11.00 ± 1.00", "-", "never / never", "-1.00 ± 2.24"]
+        "without transfer", "0", "2/2", "12.00 ± 2.00", "-", "never / never", "-",
+        "2/2", "11.00 ± 1.00", "-", "never / never", "-", "-1.00 ± 2.24"]
     with Image.open(png) as image:
         assert image.format == "PNG"
 
 
 def test_compare_on_the_seeds_given_with_the_discovery_learning_split(tmp_path, capsys):
     sweep_dir = Path(compose_experiment(tmp_path).paths.sweep_dir)
-    # (curve at steps 100 and 200, first rewarded target episode): learning = first <R> >= 8 - discovery
-    runs = {"": [([2.0, 9.0], 50), ([8.0, 9.0], 20), ([0.0, 0.0], None)],  # learning 150, 80, never
-            LAMBDA: [([9.0, 9.0], 10), ([0.0, 8.0], 150)]}                  # learning 90, 50
+    # (curve at steps 100 and 200, first rewarded target episode): learning = first <R> >= 8 - discovery;
+    # L_R after learning: 10 - <R> summed from the first <R> >= 8 on, mean over the runs that got there.
+    runs = {"": [([2.0, 9.0], 50), ([8.0, 9.0], 20), ([0.0, 0.0], None)],  # learning 150, 80, never; after 1, 3, -
+            LAMBDA: [([9.0, 10.0], 10), ([0.0, 8.0], 150)]}                 # learning 90, 50; after 1, 2
     for variant, seeds in runs.items():
         for seed, (curve, discovery) in enumerate(seeds):
             result = dataclasses.replace(synthetic_result("none", 0, seed, curve, (100, 200)),
@@ -302,13 +304,14 @@ def test_compare_on_the_seeds_given_with_the_discovery_learning_split(tmp_path, 
     out = tmp_path / "reports" / "smoke" / "compare"
     row = _row((out / f"table2_rbf__baseline__vs__{LAMBDA}.md").read_text(), "without transfer", 0)
     assert row[2] == "3/2" and row[5] == "50 / 150"  # the never-rewarded run counts as slowest
+    assert row[6] == "2.0"  # the run that never learned is not part of it
 
     assert compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", "0-1"]) == 0
     md = out / f"table2_rbf__baseline__vs__{LAMBDA}__seeds_0-1.md"
     assert str(md) in capsys.readouterr().out
     row = _row(md.read_text(), "without transfer", 0)
-    assert row[2:6] == ["2/2", "6.00 ± 3.00", "200", "35 / 115"]  # seeds 0 and 1 only
-    assert row[6:] == ["2/2", "7.00 ± 5.00", "200", "80 / 70", "+1.00 ± 5.83"]
+    assert row[2:7] == ["2/2", "6.00 ± 3.00", "200", "35 / 115", "2.0"]  # seeds 0 and 1 only
+    assert row[7:] == ["2/2", "6.50 ± 5.50", "200", "80 / 70", "1.5", "+0.50 ± 6.26"]
     for bad in ("9-x", "-1"):
         with pytest.raises(SystemExit, match=r"^error: --seeds .*give a range like 0-9"):
             compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", bad])

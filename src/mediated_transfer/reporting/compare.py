@@ -108,7 +108,7 @@ def _sweep(cfg: DictConfig, seeds: Sequence[int] | None) -> Sweep:
                  {name: (c.strategy, c.n_source) for name, c in cells.items()},
                  int(cfg.scale.seeds) if seeds is None else len(seeds),
                  int(cfg.scale.budget), int(cfg.scale.eval_points),
-                 {name: Split.of(c, threshold) for name, c in cells.items() if c.results})
+                 {name: Split.of(c, threshold, metrics.max_reward) for name, c in cells.items() if c.results})
 
 
 def parse_seeds(text: str) -> list[int]:

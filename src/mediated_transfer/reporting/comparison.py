@@ -1,7 +1,7 @@
 """Sweeps of one experiment side by side (the baseline and its variants): per table cell, each
 sweep's runs, reward loss L_R (mean +/- SEM), time to threshold, the discovery / learning split
 (median step of the first rewarded target-task episode, and median steps from there to the first
-<R> >= threshold), and how far each sweep's L_R lies from the first sweep's. One pandas DataFrame
+<R> >= threshold), the L_R lost after that first <R> >= threshold, and how far each sweep's L_R lies from the first sweep's. One pandas DataFrame
 of texts (Markdown), one of numbers (CSV), and the bars of the figure.
 """
 
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from ..sensitivity.measures import learning_span, median_or_none
+from ..sensitivity.measures import learning_span, loss_after_learning, median_or_none
 from .collect import CellRuns, variant_label
 from .figures import Bars
 from .formats import MARKDOWN
@@ -48,15 +48,20 @@ class Sweep:
 class Split:
     """When the runs of a cell first solved a target task by chance (discovery), and how long
     they then took to learn the tool skill (learning): medians over runs, a run that never got
-    there counted as slower than any that did; None when at least half never did."""
+    there counted as slower than any that did; None when at least half never did. And how much
+    they still lost once learned (after): mean L_R from the first <R> >= threshold to the end,
+    over the runs that got there; None when none did."""
 
     discovery: float | None
     learning: float | None
+    after: float | None = None
 
     @classmethod
-    def of(cls, cell: CellRuns, threshold: float) -> "Split":
+    def of(cls, cell: CellRuns, threshold: float, max_reward: float) -> "Split":
+        after = [a for r in cell.results if (a := loss_after_learning(r, threshold, max_reward)) is not None]
         return cls(median_or_none([r.first_target_reward_step for r in cell.results]),
-                   median_or_none([learning_span(r, threshold) for r in cell.results]))
+                   median_or_none([learning_span(r, threshold) for r in cell.results]),
+                   sum(after) / len(after) if after else None)
 
     def text(self) -> str:
         return " / ".join("never" if v is None else f"{v:,.0f}" for v in (self.discovery, self.learning))
@@ -94,8 +99,10 @@ def shown(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
             for x in summaries]
         columns[f"Time to threshold ({sweep.label})"] = [
             "" if x is None else steps_text(x["time_to_threshold"]) for x in summaries]
-        columns[f"Discovery / learning ({sweep.label})"] = [
-            "" if f"{s}_{n}" not in sweep.splits else sweep.splits[f"{s}_{n}"].text() for s, n in cells]
+        splits = [sweep.splits.get(f"{s}_{n}") for s, n in cells]
+        columns[f"Discovery / learning ({sweep.label})"] = ["" if x is None else x.text() for x in splits]
+        columns[f"L_R after learning ({sweep.label})"] = [
+            "" if x is None else "-" if x.after is None else f"{x.after:.1f}" for x in splits]
         if sweep is not first:
             differences = [reward_loss_difference(x, first.summaries.get(f"{s}_{n}"))
                            for x, (s, n) in zip(summaries, cells)]
@@ -121,6 +128,7 @@ def numbers(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
         splits = [sweep.splits.get(f"{s}_{n}") for s, n in cells]
         frame["discovery_median" + tag] = pd.array([x and x.discovery for x in splits], "Float64")
         frame["learning_median" + tag] = pd.array([x and x.learning for x in splits], "Float64")
+        frame["loss_after_learning_mean" + tag] = pd.array([x and x.after for x in splits], "Float64")
         if sweep is not first:
             differences = [reward_loss_difference(x or None, first.summaries.get(f"{s}_{n}"))
                            for x, (s, n) in zip(summaries, cells)]
@@ -163,5 +171,7 @@ def preamble(table: str, title: str, scale: str, threshold: float, max_reward: f
         f"{threshold:g} to the end; '-': never. Discovery / learning: median learning step of the "
         f"first rewarded target-task episode / median steps from there to the first {m.reward} {m.geq} "
         f"{threshold:g}, over runs (a run that never got there counts as slower than any; 'never': "
-        "half or more never did).",
+        "half or more never did). L_R after learning: the part of L_R from a run's first "
+        f"{m.reward} {m.geq} {threshold:g} to the end (what a learned policy still loses: collapses, "
+        "a lower plateau), mean over the runs that got there; '-': none did.",
     ]

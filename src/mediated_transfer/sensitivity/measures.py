@@ -54,6 +54,15 @@ def learning_span(result: RunResult, threshold: float) -> int | None:
     return max(0, int(reached) - int(first))
 
 
+def loss_after_learning(result: RunResult, threshold: float, max_reward: float) -> float | None:
+    """The part of L_R from the first evaluation point with <R> >= threshold to the end: what a
+    run still loses once it has learned the task (greedy collapses, a lower plateau). None when
+    the run never gets there."""
+    rewards = list(result.mean_reward)
+    reached = next((i for i, r in enumerate(rewards) if r >= threshold), None)
+    return None if reached is None else float(sum(max_reward - r for r in rewards[reached:]))
+
+
 def median_or_none(values: Sequence[int | None]) -> float | None:
     """Median over runs, a None (never) counted as slower than any value; None if that median
     is never."""
