@@ -1,8 +1,9 @@
 """Sweeps of one experiment side by side (the baseline and its variants): per table cell, each
 sweep's runs, reward loss L_R (mean +/- SEM), time to threshold, the discovery / learning split
 (median step of the first rewarded target-task episode, and median steps from there to the first
-<R> >= threshold), the L_R lost after that first <R> >= threshold, and how far each sweep's L_R lies from the first sweep's. One pandas DataFrame
-of texts (Markdown), one of numbers (CSV), and the bars of the figure.
+<R> >= threshold), the L_R lost after that first <R> >= threshold, and how far each sweep's L_R
+lies from the first sweep's. One pandas DataFrame of texts (Markdown), one of numbers (CSV), and
+the bars of the figure.
 """
 
 from __future__ import annotations

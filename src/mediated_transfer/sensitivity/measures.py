@@ -48,19 +48,23 @@ def learning_span(result: RunResult, threshold: float) -> int | None:
     with <R> >= threshold: how fast the tool skill is learned once discovered. None when the run
     never gets there (or was never rewarded on a target task)."""
     first = result.first_target_reward_step
-    reached = next((s for s, r in zip(result.steps, result.mean_reward) if r >= threshold), None)
+    reached = _first_point_at(result, threshold)
     if first is None or reached is None:
         return None
-    return max(0, int(reached) - int(first))
+    return max(0, int(result.steps[reached]) - int(first))
 
 
 def loss_after_learning(result: RunResult, threshold: float, max_reward: float) -> float | None:
     """The part of L_R from the first evaluation point with <R> >= threshold to the end: what a
     run still loses once it has learned the task (greedy collapses, a lower plateau). None when
     the run never gets there."""
-    rewards = list(result.mean_reward)
-    reached = next((i for i, r in enumerate(rewards) if r >= threshold), None)
-    return None if reached is None else float(sum(max_reward - r for r in rewards[reached:]))
+    reached = _first_point_at(result, threshold)
+    return None if reached is None else float(sum(max_reward - r for r in result.mean_reward[reached:]))
+
+
+def _first_point_at(result: RunResult, threshold: float) -> int | None:
+    """Index of the first evaluation point with <R> >= threshold; None: never."""
+    return next((i for i, r in enumerate(result.mean_reward) if r >= threshold), None)
 
 
 def median_or_none(values: Sequence[int | None]) -> float | None:
