@@ -21,6 +21,7 @@ from mediated_transfer.metrics import summarise_runs
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.reporting.build import build_report
 from mediated_transfer.reporting.collect import collect_sweep
+from mediated_transfer.reporting.compare import comparison_stem
 from mediated_transfer.reporting.compare import main as compare_main
 from mediated_transfer.reporting.compose import compose_experiment as compose_report_config
 from mediated_transfer.reporting.figures import fastest_transfer
@@ -317,6 +318,17 @@ def test_compare_on_the_seeds_given_with_the_discovery_learning_split(tmp_path, 
             compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", bad])
     with pytest.raises(SystemExit, match=r"^error: --seeds 7: baseline has no finished run of these seeds$"):
         compare_main([*reporting_args(tmp_path), "--variant", LAMBDA, "--seeds", "7"])
+
+
+def test_a_comparison_of_many_long_variants_has_a_valid_distinct_file_name(tmp_path):
+    labels = ["baseline", *(f"tuned=linear_q_fsr_round2,representation.tool_origin_high={k},"
+                            "representation.tool_target_high=24" for k in range(5))]
+    stem = comparison_stem("table3_fsr", labels, list(range(10)))
+    assert len(stem) <= 240 and stem.startswith("table3_fsr__baseline__vs__tuned=linear_q_fsr_round2")
+    assert stem != comparison_stem("table3_fsr", labels[:-1] + ["baseline2"], list(range(10)))
+    (tmp_path / f"{stem}.png").write_bytes(b"")  # the file system takes it
+    short = comparison_stem("table2_rbf", ["baseline", LAMBDA], [0, 1, 2])
+    assert short == f"table2_rbf__baseline__vs__{LAMBDA}__seeds_0-2"  # short names are unchanged
 
 
 def test_compare_of_a_variant_without_runs_names_the_variants_present(two_sweeps):

@@ -130,12 +130,12 @@ def reports_dir(cfg: DictConfig, variant: str) -> Path:
     return root / "variants" / path_name(variant) if variant else root
 
 
-def path_name(text: str) -> str:
-    """``text`` as one file or folder name: characters other than letters, digits and . _ = , + -
-    become '_' (a variant may hold '/', quotes or brackets)."""
+def path_name(text: str, limit: int = 120) -> str:
+    """``text`` as one file or folder name of at most ``limit`` characters: characters other than
+    letters, digits and . _ = , + - become '_' (a variant may hold '/', quotes or brackets)."""
     name = re.sub(r"[^\w.=,+-]", "_", text, flags=re.ASCII)
-    if len(name) > 120:  # file systems limit names to 255 bytes; keep them distinct when cut
-        name = f"{name[:100]}-{hashlib.sha256(text.encode()).hexdigest()[:12]}"
+    if len(name) > limit:  # file systems limit names to 255 bytes; keep them distinct when cut
+        name = f"{name[:limit - 20]}-{hashlib.sha256(text.encode()).hexdigest()[:12]}"
     return name
 
 

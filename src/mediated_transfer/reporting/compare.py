@@ -69,8 +69,7 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
     cells = compared_cells(sweeps, paper_rows(str(first.report.paper_table)))
     out = Path(first.paths.reports_dir) / "compare"
     out.mkdir(parents=True, exist_ok=True)
-    stem = f"{path_name(table)}__" + "__vs__".join(path_name(s.label) for s in sweeps) + (
-        "" if seeds is None else f"__seeds_{_seeds_text(seeds)}")
+    stem = comparison_stem(table, [s.label for s in sweeps], seeds)
     title = str(first.report.title)
     notes = preamble(table, title, str(first.scale.name), float(first.threshold),
                      float(first.env.success_reward), sweeps)
@@ -84,6 +83,14 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
                                 f"scale {first.scale.name}: " + " vs ".join(s.label for s in sweeps)
                                 + "; mean of runs +/- SEM, lower is better", out / f"{stem}.png"))
     return Comparison(files, sweeps)
+
+
+def comparison_stem(table: str, labels: Sequence[str], seeds: Sequence[int] | None = None) -> str:
+    """File name (without extension) of a comparison: the table, the sweeps, the seeds; at most
+    240 characters, so many long variants still make a valid name (cut with a hash, distinct)."""
+    stem = f"{path_name(table)}__" + "__vs__".join(path_name(label) for label in labels) + (
+        "" if seeds is None else f"__seeds_{_seeds_text(seeds)}")
+    return path_name(stem, limit=240)
 
 
 def _overrides(variant: str) -> list[str]:
