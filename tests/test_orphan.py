@@ -15,9 +15,14 @@ def _reparented(monkeypatch) -> None:
     monkeypatch.setattr(orphan.os, "getppid", lambda: next(parents))
 
 
-def test_a_pool_worker_is_orphaned_once_its_launcher_is_gone(monkeypatch):
+def orphaned_pool_worker(monkeypatch) -> None:
+    """This process as a launcher's pool worker whose launcher dies after its first check."""
     monkeypatch.setattr(orphan.multiprocessing, "parent_process", lambda: object())
     _reparented(monkeypatch)
+
+
+def test_a_pool_worker_is_orphaned_once_its_launcher_is_gone(monkeypatch):
+    orphaned_pool_worker(monkeypatch)
     orphaned = orphan.launcher_watch()
     assert orphaned()
 

@@ -224,15 +224,11 @@ def test_a_diverged_run_scores_zero_reward_for_the_rest_of_its_budget():
 
 
 def test_a_trial_stops_when_the_tuning_process_that_started_it_is_gone(monkeypatch):
-    import itertools
-
-    from mediated_transfer import orphan
     from mediated_transfer.tuning import objective
 
-    # A worker of the tuning's pool, reparented to init after its trial started.
-    parents = itertools.chain([4242], itertools.repeat(1))
-    monkeypatch.setattr(orphan.multiprocessing, "parent_process", lambda: object())
-    monkeypatch.setattr(orphan.os, "getppid", lambda: next(parents))
+    from .test_orphan import orphaned_pool_worker
+
+    orphaned_pool_worker(monkeypatch)  # a worker of the tuning's pool, orphaned after its trial started
     with pytest.raises(KeyboardInterrupt, match="launching process is gone"):
         objective.run_seed(["scale=smoke", "tracking=none", "seed=1000"])
 
