@@ -195,8 +195,12 @@ def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, 
     assert [c.name for c in refinement.candidates] == ["defaults", "greedy"]
     assert refinement.candidates[1].values["algorithm.epsilon"] == 0.01
     assert refinement.candidates[1].values["algorithm.lambda_"] == refinement.space.defaults["algorithm.lambda_"]
+    # Seed by seed, so a refinement stopped midway has compared every candidate on the same seeds.
+    assert [(c.name, s) for c, s in refinement.runs()] == [
+        ("defaults", 1000), ("greedy", 1000), ("defaults", 1001), ("greedy", 1001)]
 
     rows = refine.refine(refinement, tmp_path / "out")
+    assert "[refine fsr 4/4, ~0m00s left]" in capsys.readouterr().out
     assert sorted(zip(rows["candidate"], rows["seed"])) == [
         ("defaults", 1000), ("defaults", 1001), ("greedy", 1000), ("greedy", 1001)]
     again = refine.refine(refinement, tmp_path / "out")  # nothing left to run

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -25,6 +26,7 @@ import numpy as np
 import pandas as pd
 from omegaconf import OmegaConf
 
+from ..progress import duration
 from .objective import first_step_at_threshold, learning_span, run_seed
 from .space import SEARCH_SPACE_DIR, SearchSpace, SearchSpaceError, find_search_space
 
@@ -48,7 +50,9 @@ class Refinement:
     candidates: tuple[Candidate, ...]
 
     def runs(self) -> list[tuple[Candidate, int]]:
-        return [(c, s) for c in self.candidates for s in self.seeds]
+        """Seed by seed: a refinement stopped midway (a DQN one takes hours) has run every
+        candidate on the same seeds, so its partial table compares like with like."""
+        return [(c, s) for s in self.seeds for c in self.candidates]
 
 
 def load_refinement(learner: str, folder: Path = SEARCH_SPACE_DIR, scale: str | None = None) -> Refinement:
@@ -96,14 +100,16 @@ def refine(refinement: Refinement, folder: Path, workers: int = 1) -> pd.DataFra
     have = {(str(c), int(s)) for c, s in zip(done["candidate"], done["seed"])}
     todo = [(c, s) for c, s in refinement.runs() if (c.name, s) not in have]
     print(f"[refine {refinement.space.learner}] {len(have)} runs done, {len(todo)} to run, {workers} worker(s)")
+    total, start = len(have) + len(todo), time.monotonic()
     with ProcessPoolExecutor(max_workers=workers) as pool:
         futures = {pool.submit(run_one, refinement.space, c, s): (c.name, s) for c, s in todo}
-        for future in as_completed(futures):
+        for finished, future in enumerate(as_completed(futures), 1):
             row = future.result()
             # One writer (this process), one appended line per finished run: nothing is lost.
             pd.DataFrame([row], columns=COLUMNS).to_csv(path, mode="a", header=not path.is_file(), index=False)
-            print(f"[refine {refinement.space.learner}] {row['candidate']} seed={row['seed']}: "
-                  f"L_R {row['reward_loss']:.1f}", flush=True)
+            left = (time.monotonic() - start) / finished * (len(todo) - finished)
+            print(f"[refine {refinement.space.learner} {len(have) + finished}/{total}, ~{duration(left)} left] "
+                  f"{row['candidate']} seed={row['seed']}: L_R {row['reward_loss']:.1f}", flush=True)
     return pd.read_csv(path)
 
 
