@@ -95,6 +95,14 @@ def test_the_study_sweeps_and_reports_end_to_end(tmp_path):
     assert sensitivity_main(["--random-episodes=50", "--resamples=100", *common]) == 0
     assert "A person's reading." in path.read_text()
 
+    # Other learner values: that variant's own report, beside (not over) the study's.
+    variant = [*common[:2], "env=default", "seed=0", "algorithm.epsilon=0.2"]
+    _run_cli("experiment=sensitivity", "hydra/launcher=basic", *variant)
+    assert sensitivity_main(["--random-episodes=50", "--resamples=100", *variant]) == 0
+    other = (tmp_path / "reports" / "smoke" / "variants" / "algorithm.epsilon=0.2" / "SENSITIVITY.md").read_text()
+    assert "the overrides `algorithm.epsilon=0.2`" in other and "1 / 1 / 1" in other
+    assert "A person's reading." in path.read_text() and "overrides" not in path.read_text()
+
     # The tables' report command skips the study, and named, says where its report comes from.
     from mediated_transfer.reporting.__main__ import main as reporting_main
 

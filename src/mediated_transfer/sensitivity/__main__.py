@@ -2,7 +2,9 @@
 
 Builds reports/SENSITIVITY.md, its table (reports/sensitivity/sensitivity.csv) and figure from
 the runs of ``python -m mediated_transfer experiment=sensitivity`` with the same overrides
-(scale, paths.root, and e.g. env=default,tool_frame seed=0 for a smaller check). The options
+(scale, paths.root, and e.g. env=default,tool_frame seed=0 for a smaller check). With other
+learner values (tuned=linear_q_rbf_round1, algorithm.lambda_=0.5) the report is that variant's,
+in reports/variants/<variant>/. The options
 change the study's measures from their pre-registered values (sensitivity/measures.py), for
 quick checks only."""
 
@@ -10,8 +12,8 @@ from __future__ import annotations
 
 import sys
 from dataclasses import replace
-from pathlib import Path
 
+from ..reporting.build import reports_dir
 from ..reporting.compose import USER_ERRORS, one_line
 from .measures import Measures
 from .report import write_report
@@ -38,7 +40,9 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 overrides.append(arg)
         study = load_study(overrides)
-        paths = write_report(study, measures, Path(study.config.paths.reports_dir),
+        # A variant's report goes to variants/<variant>/, as the tables' do: it never overwrites
+        # the study's own.
+        paths = write_report(study, measures, reports_dir(study.config, study.variant),
                              progress=lambda line: print(line, file=sys.stderr))
     except USER_ERRORS as error:
         raise SystemExit(f"error: {one_line(error)}") from None

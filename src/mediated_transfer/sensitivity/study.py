@@ -48,6 +48,9 @@ class Study:
     """The arms: none_0 first, then the transfer arms."""
     seeds: tuple[int, ...]
     sweep_dir: Path
+    variant: str = ""
+    """The learner's overrides beyond the study's own worlds, arms and seeds (e.g.
+    tuned=linear_q_rbf_round1): '' for the study as pre-registered."""
 
     @property
     def baseline(self) -> World:
@@ -65,7 +68,9 @@ def load_study(overrides: Sequence[str] = ()) -> Study:
     # A sweep override (env=default,tool_frame: a smaller check) narrows the study's own list.
     parsed = OverridesParser.create().parse_overrides(overrides)
     fixed = [o.input_line for o in parsed if not o.is_sweep_override()]
-    base = compose_config([f"experiment={EXPERIMENT}", *fixed], hydra=True)
+    # A world named alone (env=default) narrows the study's worlds; each world is composed below.
+    learner = [o for o in fixed if o.split("=", 1)[0].lstrip("+~") != "env"]
+    base = compose_config([f"experiment={EXPERIMENT}", *learner], hydra=True)
     jobs = planned_jobs(base, [f"experiment={EXPERIMENT}", *overrides])
     values: dict[str, list[str]] = {"env": [], "cell": [], "seed": []}
     for job in jobs:
@@ -78,9 +83,9 @@ def load_study(overrides: Sequence[str] = ()) -> Study:
                          f"and cell over none_0: the gains are measured against both")
     worlds = []
     for option in values["env"]:
-        cfg = compose_config([f"experiment={EXPERIMENT}", *fixed, f"env={option}"], hydra=True)
+        cfg = compose_config([f"experiment={EXPERIMENT}", *learner, f"env={option}"], hydra=True)
         world = config_from_mapping(WorldConfig, OmegaConf.to_container(cfg.env, resolve=True), "env")
         worlds.append(World(option, world, variant_of(cfg)))
     cells = ["none_0"] + [c for c in values["cell"] if c != "none_0"]
     return Study(base, tuple(worlds), tuple(cells), tuple(sorted(int(s) for s in values["seed"])),
-                 Path(base.paths.sweep_dir))
+                 Path(base.paths.sweep_dir), variant_of(base))
