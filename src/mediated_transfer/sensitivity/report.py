@@ -213,13 +213,14 @@ def write_report(study: Study, measures: Measures, reports_dir: Path, progress=p
     figure = plot(results, study, out / "sensitivity.png")
     cfg = study.config
     missing = sum(len(study.seeds) - n for r in results for n in r.runs.values())
+    overrides = f" and the overrides `{study.variant}`" if study.variant else ""
     header = [
         "# Sensitivity study: how much transfer helps depends on the task (issue 13)",
         f"Built by `python -m mediated_transfer.sensitivity` from the runs of the pre-registered study "
         f"`conf/experiment/sensitivity.yaml` (its git history shows it was committed before any of its "
         f"runs; no world was chosen after seeing results): {len(study.worlds)} worlds x "
         f"{len(study.cells)} arms x {len(study.seeds)} seeds, linear Q(lambda) + RBF with Table I's "
-        f"values{f' and the overrides `{study.variant}`' if study.variant else ''}, {cfg.scale.budget:,} learning steps, {cfg.scale.eval_points} x {cfg.scale.eval_episodes} "
+        f"values{overrides}, {cfg.scale.budget:,} learning steps, {cfg.scale.eval_points} x {cfg.scale.eval_episodes} "
         f"evaluation episodes (scale {cfg.scale.name})."
         + (f" **{missing} runs are not finished yet**; their rows count what exists." if missing else ""),
         "Columns: the random policy's success rate on target tasks "
