@@ -207,6 +207,11 @@ def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, 
     assert len(again) == 4 and "0 to run" in capsys.readouterr().out
     text = refine.section(refinement, again)
     assert "| defaults | provisional defaults | 2 |" in text and "| greedy | a test | 2 |" in text
+    assert "Not finished" not in text
+    # Stopped after its first run: the table says so, and a candidate without runs shows '-'.
+    partial = refine.section(refinement, again.iloc[:1])
+    assert "**Not finished: 1 of 4 runs so far**" in partial
+    assert "| greedy | a test | 0 | - | - | 0/0 |" in partial and "nan" not in partial
 
     (folder / "refine" / "fsr.yaml").write_text("learner: fsr\nseeds: [3]\ncandidates: {}\n")
     with pytest.raises(SearchSpaceError, match="table seeds"):

@@ -140,12 +140,17 @@ def section(refinement: Refinement, rows: pd.DataFrame) -> str:
              "<R> >= 8 (mean over the runs that reach it).", "",
              "| candidate | from | runs | L_R | learning span | reached <R> >= 8 | " + " | ".join(f"`{k}`" for k in keys) + " |",
              "|---|---|---:|---:|---:|---:|" + "---:|" * len(keys)]
+    done, planned = int(table["runs"].sum()), len(refinement.runs())
+    if done < planned:
+        lines[0] += f" **Not finished: {done} of {planned} runs so far** (seed by seed, so the candidates share their seeds)."
     by_name = {c.name: c for c in refinement.candidates}
     for _, r in table.iterrows():
         values = [_fmt(by_name[r["candidate"]].values[k]) for k in keys]
         span = "-" if math.isnan(r["learning_span_mean"]) else f"{r['learning_span_mean']:,.0f}"
-        lines.append(f"| {r['candidate']} | {r['from']} | {r['runs']} | {r['reward_loss_mean']:.1f} ± "
-                     f"{r['reward_loss_sem']:.1f} | {span} | {r['reached']}/{r['runs']} | " + " | ".join(values) + " |")
+        loss = ("-" if math.isnan(r["reward_loss_mean"]) else f"{r['reward_loss_mean']:.1f}"
+                + ("" if math.isnan(r["reward_loss_sem"]) else f" ± {r['reward_loss_sem']:.1f}"))
+        lines.append(f"| {r['candidate']} | {r['from']} | {r['runs']} | {loss} | {span} | "
+                     f"{r['reached']}/{r['runs']} | " + " | ".join(values) + " |")
     return "\n".join(lines) + "\n"
 
 
