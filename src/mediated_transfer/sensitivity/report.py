@@ -220,8 +220,8 @@ def write_report(study: Study, measures: Measures, reports_dir: Path, progress=p
         f"`conf/experiment/sensitivity.yaml` (its git history shows it was committed before any of its "
         f"runs; no world was chosen after seeing results): {len(study.worlds)} worlds x "
         f"{len(study.cells)} arms x {len(study.seeds)} seeds, linear Q(lambda) + RBF with Table I's "
-        f"values{overrides}, {cfg.scale.budget:,} learning steps, {cfg.scale.eval_points} x {cfg.scale.eval_episodes} "
-        f"evaluation episodes (scale {cfg.scale.name})."
+        f"values{overrides}, {cfg.scale.budget:,} learning steps, {cfg.scale.eval_points} x "
+        f"{cfg.scale.eval_episodes} evaluation episodes (scale {cfg.scale.name})."
         + (f" **{missing} runs are not finished yet**; their rows count what exists." if missing else ""),
         "Columns: the random policy's success rate on target tasks "
         f"({measures.random_episodes:,} episodes; how rare discovery is); without transfer, the median "

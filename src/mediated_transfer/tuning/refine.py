@@ -142,7 +142,8 @@ def section(refinement: Refinement, rows: pd.DataFrame) -> str:
              "|---|---|---:|---:|---:|---:|" + "---:|" * len(keys)]
     done, planned = int(table["runs"].sum()), len(refinement.runs())
     if done < planned:
-        lines[0] += f" **Not finished: {done} of {planned} runs so far** (seed by seed, so the candidates share their seeds)."
+        lines[0] += (f" **Not finished: {done} of {planned} runs so far** (seed by seed, so the "
+                     "candidates share their seeds).")
     by_name = {c.name: c for c in refinement.candidates}
     for _, r in table.iterrows():
         values = [_fmt(by_name[r["candidate"]].values[k]) for k in keys]
