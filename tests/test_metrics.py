@@ -7,6 +7,8 @@ import pytest
 
 from mediated_transfer.metrics import (
     MetricsConfig,
+    first_point_at_threshold,
+    learning_span,
     reward_loss,
     summarise_runs,
     time_to_threshold,
@@ -42,6 +44,21 @@ def test_time_to_threshold_ignores_an_early_crossing_followed_by_a_dip():
 def test_time_to_threshold_is_none_when_never_reached_or_below_at_the_end():
     assert time_to_threshold(STEPS, [1.0, 2.0, 4.0, 6.0, 7.99]) is None
     assert time_to_threshold(STEPS, [8.0, 9.0, 9.5, 9.0, 7.5]) is None
+
+
+def test_first_point_at_threshold_counts_a_crossing_even_if_the_curve_dips_later():
+    assert first_point_at_threshold([1.0, 8.0, 2.0, 9.0, 9.0], 8.0) == 1
+    assert first_point_at_threshold([1.0, 7.9, 2.0], 8.0) is None
+
+
+def test_learning_span_runs_from_discovery_to_the_first_point_at_the_threshold():
+    curve = [0.0, 2.0, 8.5, 3.0, 9.0]
+    assert learning_span(25_000, STEPS, curve, 8.0) == 60_000 - 25_000
+    # The threshold passed at an evaluation before the first rewarded episode of learning
+    # (a transferred skill): no negative span.
+    assert learning_span(70_000, STEPS, curve, 8.0) == 0
+    assert learning_span(None, STEPS, curve, 8.0) is None  # never rewarded on a target task
+    assert learning_span(25_000, STEPS, [0.0, 7.9, 0.0, 0.0, 0.0], 8.0) is None  # never reached
 
 
 def test_time_to_threshold_tolerates_round_off_of_averaging_only():

@@ -8,7 +8,7 @@ import pytest
 
 from mediated_transfer.results import RunResult
 from mediated_transfer.sensitivity.measures import (
-    Measures, arm_gain, learning_span, median_or_none, ratio_interval, threshold_time)
+    Measures, arm_gain, median_or_none, ratio_interval, threshold_time)
 
 STEPS = [100, 200, 300, 400]
 FAST = Measures(resamples=500)
@@ -22,11 +22,11 @@ def _run(curve, first_reward=None, seed=0, cell=("none", 0)) -> RunResult:
 
 
 def test_learning_span_runs_from_the_first_reward_to_the_first_point_at_the_threshold():
-    assert learning_span(_run([0, 9, 2, 9], first_reward=150), 8.0) == 50
+    assert _run([0, 9, 2, 9], first_reward=150).learning_span(8.0) == 50
     # Reaching the threshold at the point where the reward came counts from the reward.
-    assert learning_span(_run([8, 9, 9, 9], first_reward=120), 8.0) == 0
-    assert learning_span(_run([0, 7.9, 0, 0], first_reward=150), 8.0) is None  # never reached
-    assert learning_span(_run([0, 0, 0, 0]), 8.0) is None  # never rewarded
+    assert _run([8, 9, 9, 9], first_reward=120).learning_span(8.0) == 0
+    assert _run([0, 7.9, 0, 0], first_reward=150).learning_span(8.0) is None  # never reached
+    assert _run([0, 0, 0, 0]).learning_span(8.0) is None  # never rewarded
 
 
 def test_medians_count_a_never_as_slower_than_any_value():

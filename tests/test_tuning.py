@@ -19,7 +19,7 @@ from mediated_transfer import tracking
 from mediated_transfer.results import RunResult
 from mediated_transfer.tuning import mlflow_log, study as study_module
 from mediated_transfer.tuning.__main__ import main as tune
-from mediated_transfer.tuning.objective import first_step_at_threshold, learning_span, trial_record
+from mediated_transfer.tuning.objective import first_step_at_threshold, trial_record
 from mediated_transfer.tuning.sampler import TrialSeededRandomSampler
 from mediated_transfer.tuning.space import SEARCH_SPACE_DIR, SearchSpaceError, find_search_space, load_search_space
 from mediated_transfer.tuning.study import StudyPlan, load_study, study_folder
@@ -106,12 +106,10 @@ def test_a_trial_whose_worker_died_is_redone_with_its_values(space, tmp_path, mo
     assert dead.params in [t.params for t in done]
 
 
-def test_first_step_at_threshold_and_the_learning_span():
+def test_first_step_at_threshold_and_the_learning_span_in_a_trial_record():
     steps = [100, 200, 300, 400]
     assert first_step_at_threshold(steps, [0.0, 8.0, 7.0, 9.0], 8.0) == 200  # reached, not stable
     assert first_step_at_threshold(steps, [0.0, 7.9, 7.0, 1.0], 8.0) is None
-    assert learning_span(40, 200) == 160
-    assert learning_span(None, 200) is None and learning_span(40, None) is None
 
     def result(rewards, discovery):
         return RunResult("linear_q", "rbf", "none", 0, 0, 400, steps, rewards, [r / 10 for r in rewards],

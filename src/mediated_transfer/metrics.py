@@ -82,6 +82,25 @@ def time_to_threshold(
     return int(steps[last_below + 1])
 
 
+def first_point_at_threshold(mean_rewards, threshold: float = _DEFAULT.threshold) -> int | None:
+    """Index of the first evaluation point with <R> >= threshold, reached once (unlike time to
+    threshold, the curve may fall below it again later); None: never."""
+    return next((i for i, r in enumerate(mean_rewards) if r >= threshold), None)
+
+
+def learning_span(first_target_reward_step: int | None, steps, mean_rewards,
+                  threshold: float = _DEFAULT.threshold) -> int | None:
+    """Learning steps from the first rewarded target-task episode (discovery) to the first
+    evaluation point with <R> >= threshold: how fast the tool skill is learned once discovered.
+    0 when that point comes first (a transferred skill can pass an evaluation before a target
+    episode of learning is rewarded); None when the run never gets there or was never rewarded
+    on a target task."""
+    reached = first_point_at_threshold(mean_rewards, threshold)
+    if first_target_reward_step is None or reached is None:
+        return None
+    return max(0, int(steps[reached]) - int(first_target_reward_step))
+
+
 def summarise_runs(curves, steps, config: MetricsConfig = _DEFAULT) -> dict:
     """Everything the result tables need about one configuration, from its runs' curves.
 

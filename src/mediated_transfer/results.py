@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .atomic import atomic_write_text
+from .metrics import learning_span
 
 RESULT_FILE = "result.json"
 CURVE_FILE = "curve.csv"
@@ -64,6 +65,11 @@ class RunResult:
     @property
     def failed(self) -> bool:
         return self.failure is not None
+
+    def learning_span(self, threshold: float) -> int | None:
+        """Steps from this run's first rewarded target-task episode to its first evaluation
+        point with <R> >= threshold (metrics.learning_span)."""
+        return learning_span(self.first_target_reward_step, self.steps, self.mean_reward, threshold)
 
     def write(self, folder: str | os.PathLike) -> Path:
         folder = Path(folder)

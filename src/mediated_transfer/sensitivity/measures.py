@@ -13,7 +13,7 @@ import numpy as np
 from scipy import stats
 
 from ..metrics import _median_time as median_time  # a never-reached run counts as +inf
-from ..metrics import time_to_threshold
+from ..metrics import first_point_at_threshold, time_to_threshold
 from ..results import RunResult
 
 
@@ -43,28 +43,12 @@ class Interval:
         return self.low <= x <= self.high
 
 
-def learning_span(result: RunResult, threshold: float) -> int | None:
-    """Learning steps from the first rewarded target-task episode to the first evaluation point
-    with <R> >= threshold: how fast the tool skill is learned once discovered. None when the run
-    never gets there (or was never rewarded on a target task)."""
-    first = result.first_target_reward_step
-    reached = _first_point_at(result, threshold)
-    if first is None or reached is None:
-        return None
-    return max(0, int(result.steps[reached]) - int(first))
-
-
 def loss_after_learning(result: RunResult, threshold: float, max_reward: float) -> float | None:
     """The part of L_R from the first evaluation point with <R> >= threshold to the end: what a
     run still loses once it has learned the task (greedy collapses, a lower plateau). None when
     the run never gets there."""
-    reached = _first_point_at(result, threshold)
+    reached = first_point_at_threshold(result.mean_reward, threshold)
     return None if reached is None else float(sum(max_reward - r for r in result.mean_reward[reached:]))
-
-
-def _first_point_at(result: RunResult, threshold: float) -> int | None:
-    """Index of the first evaluation point with <R> >= threshold; None: never."""
-    return next((i for i, r in enumerate(result.mean_reward) if r >= threshold), None)
 
 
 def median_or_none(values: Sequence[int | None]) -> float | None:

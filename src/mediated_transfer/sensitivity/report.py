@@ -22,7 +22,7 @@ from ..reporting.collect import CellRuns, collect_sweep
 from ..reporting.figures import _pyplot
 from ..reporting.formats import write_csv
 from ..reporting.paper import paper_rows
-from .measures import ArmGain, Measures, arm_gain, learning_span, median_or_none
+from .measures import ArmGain, Measures, arm_gain, median_or_none
 from ..env.scripted import random_success_rate
 from .study import Study, World
 
@@ -67,7 +67,7 @@ def measure(study: Study, measures: Measures, progress=print) -> list[WorldResul
         if none is not None and none.results:
             runs = none.results
             row.discovery_median = median_or_none([r.first_target_reward_step for r in runs])
-            row.learning_median = median_or_none([learning_span(r, threshold) for r in runs])
+            row.learning_median = median_or_none([r.learning_span(threshold) for r in runs])
             losses = np.array([r.reward_loss for r in runs])
             row.reward_loss_none = float(losses.mean())
             row.reward_loss_none_sem = float(losses.std(ddof=1) / math.sqrt(len(losses))) if len(losses) > 1 else math.nan

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..metrics import first_point_at_threshold
 from ..orphan import launcher_watch
 from ..results import RunResult
 from .space import SearchSpace
@@ -78,14 +79,10 @@ def _scored_to_the_end(result: RunResult, budget: int, eval_points: int, max_rew
 
 
 def first_step_at_threshold(steps: Sequence[int], rewards: Sequence[float], threshold: float) -> int | None:
-    """The first evaluation step with <R> >= threshold (reached once, stable or not); None: never."""
-    above = [s for s, r in zip(steps, rewards) if r >= threshold]
-    return int(above[0]) if above else None
-
-
-def learning_span(discovery: int | None, at_threshold: int | None) -> int | None:
-    """Steps from the first rewarded target-task episode to the first <R> >= threshold."""
-    return None if discovery is None or at_threshold is None else at_threshold - discovery
+    """The learning step of the first evaluation point with <R> >= threshold (reached once,
+    stable or not); None: never."""
+    point = first_point_at_threshold(rewards, threshold)
+    return None if point is None else int(steps[point])
 
 
 def trial_record(seeds: Sequence[int], results: Sequence[RunResult], threshold: float) -> dict[str, Any]:
@@ -103,7 +100,7 @@ def trial_record(seeds: Sequence[int], results: Sequence[RunResult], threshold: 
         "reward_loss": [float(r.reward_loss) for r in results],
         "first_target_reward_step": discovery,
         "first_threshold_step": at_threshold,
-        "learning_span": [learning_span(d, t) for d, t in zip(discovery, at_threshold)],
+        "learning_span": [r.learning_span(threshold) for r in results],
         "time_to_threshold": [r.time_to_threshold for r in results],
         "final_reward": [float(r.mean_reward[-1]) for r in results],
         "wall_time_s": [float(r.wall_time_s) for r in results],

@@ -27,7 +27,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from ..progress import duration
-from .objective import first_step_at_threshold, learning_span, run_seed
+from .objective import first_step_at_threshold, run_seed
 from .space import SEARCH_SPACE_DIR, SearchSpace, SearchSpaceError, find_search_space
 
 REFINE_FILE = "refine.csv"
@@ -87,7 +87,7 @@ def run_one(space: SearchSpace, candidate: Candidate, seed: int) -> dict[str, An
     return {
         "candidate": candidate.name, "seed": seed, "reward_loss": result.reward_loss,
         "first_target_reward_step": result.first_target_reward_step, "first_threshold_step": at_threshold,
-        "learning_span": learning_span(result.first_target_reward_step, at_threshold),
+        "learning_span": result.learning_span(threshold),
         "time_to_threshold": result.time_to_threshold, "final_reward": result.mean_reward[-1],
     }
 
