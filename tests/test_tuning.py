@@ -216,6 +216,126 @@ def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, 
         refine.load_refinement("fsr", folder, scale="smoke")
 
 
+def _refine_rows(losses: dict[str, list[float]], first_seed: int = 1003):
+    import pandas as pd
+
+    from mediated_transfer.tuning.refine import COLUMNS
+
+    return pd.DataFrame([{"candidate": name, "seed": first_seed + k, "reward_loss": loss}
+                         for name, per_seed in losses.items() for k, loss in enumerate(per_seed)],
+                        columns=COLUMNS)
+
+
+def _dqn_refinement(tmp_path, choice: str | None):
+    import shutil
+
+    from mediated_transfer.tuning import refine
+    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
+
+    folder = tmp_path / "spaces"
+    (folder / "refine").mkdir(parents=True, exist_ok=True)
+    shutil.copy(SEARCH_SPACE_DIR / "dqn.yaml", folder)
+    (folder / "refine" / "dqn.yaml").write_text(
+        "learner: dqn\nseeds: [1003, 1004, 1005]\n" + (f"choice: {choice}\n" if choice else "")
+        + "candidates:\n"
+        "  costly: {from: a test, values: {algorithm.train_frequency: 1, algorithm.batch_size: 128}}\n"
+        "  cheap: {from: a test, values: {algorithm.train_frequency: 4, algorithm.batch_size: 32}}\n"
+        "  middle: {from: a test, values: {algorithm.train_frequency: 2, algorithm.batch_size: 32}}\n")
+    return refine.load_refinement("dqn", folder, scale="smoke")
+
+
+def test_refinement_choice_lowest_mean_or_the_cheapest_within_one_sem(tmp_path):
+    from mediated_transfer.tuning import refine
+
+    lowest = _dqn_refinement(tmp_path, None)
+    rule = _dqn_refinement(tmp_path, "cheapest_within_one_sem")
+    costs = {c.name: refine.update_cost(c.values) for c in rule.candidates}
+    assert costs["costly"] == pytest.approx(16 * costs["cheap"]) and costs["middle"] == 2 * costs["cheap"]
+    # costly: mean 50, SEM 11.5 -> the band reaches 61.5; middle (58) is in it, cheap (63) is not.
+    rows = _refine_rows({"costly": [30, 50, 70], "middle": [58, 58, 58], "cheap": [63, 63, 63]})
+    assert refine.choose(lowest, rows)[0] == "costly"
+    name, why = refine.choose(rule, rows)
+    assert name == "middle" and "within one SEM of the lowest mean (`costly`, 50.0 ± 11.5)" in why
+    assert "at 0.12 of its update cost" in why
+    # Nothing cheaper within the band: the lowest mean stays.
+    far = _refine_rows({"costly": [30, 50, 70], "middle": [75] * 3, "cheap": [62, 63, 64]})
+    assert refine.choose(rule, far)[0] == "costly"
+    text = refine.section(rule, rows)
+    assert "| costly | a test | 3 | 50.0 ± 11.5 |" in text and "| 16x |" in text
+    assert "Chosen by the refinement's rule (the one-standard-error rule: the cheapest" in text  # all 9 runs done
+    assert "Leading so far" not in text
+    assert "**Leading so far**" in refine.section(rule, rows.iloc[:4])
+    assert refine.choose(rule, rows.iloc[:0]) is None
+
+
+def test_refinement_choice_is_checked_before_any_run(tmp_path):
+    import shutil
+
+    from mediated_transfer.tuning import refine
+    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
+
+    with pytest.raises(SearchSpaceError, match=r"choice must be one of lowest_mean, cheapest_within_one_sem, got 'cheapest'"):
+        _dqn_refinement(tmp_path, "cheapest")
+    folder = tmp_path / "spaces"
+    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
+    (folder / "refine" / "fsr.yaml").write_text(
+        "learner: fsr\nseeds: [1000]\nchoice: cheapest_within_one_sem\ncandidates: {a: {values: {}}}\n")
+    with pytest.raises(SearchSpaceError, match="needs a run cost, known for the dqn learner only"):
+        refine.load_refinement("fsr", folder, scale="smoke")
+
+
+RACE = {"defaults": [10.0, 12.0, 11.0, 13.0], "greedy": [100.0, 110.0, 105.0, 108.0]}
+
+
+def _raced_run(space, candidate, seed):
+    """A stand-in for refine.run_one (module level: the worker process unpickles it)."""
+    return {"candidate": candidate.name, "seed": seed, "reward_loss": RACE[candidate.name][seed - 1000]}
+
+
+def test_racing_drops_a_clearly_worse_candidate_and_runs_it_no_more(tmp_path, capsys, monkeypatch):
+    import shutil
+
+    from mediated_transfer.tuning import refine
+    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
+
+    folder = tmp_path / "spaces"
+    (folder / "refine").mkdir(parents=True)
+    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
+    (folder / "refine" / "fsr.yaml").write_text(
+        "learner: fsr\nseeds: [1000, 1001, 1002, 1003]\nracing: {min_seeds: 2, p_value: 0.05}\ncandidates:\n"
+        "  defaults: {from: provisional defaults, values: {}}\n"
+        "  greedy: {from: a test, values: {algorithm.epsilon: 0.01}}\n")
+    refinement = refine.load_refinement("fsr", folder, scale="smoke")
+    # After seed 1000 alone nothing is decided; after 1001: greedy is worse by 94 (leader's SEM 1),
+    # paired t = 23.5 on 1 degree of freedom, one-sided p = 0.014 < 0.05.
+    rows = _refine_rows({name: losses[:2] for name, losses in RACE.items()}, first_seed=1000)
+    assert refine.dropped(refinement, rows.iloc[[0, 2]]) == {}
+    out = refine.dropped(refinement, rows)
+    assert list(out) == ["greedy"] and out["greedy"].startswith("dropped after seed 1001 (2 seeds): L_R 105.0 against `defaults`'s 11.0")
+    assert "p = 0.014" in out["greedy"]
+    # A seed not every remaining candidate has run decides nothing.
+    assert refine.dropped(refinement, rows.iloc[[0, 1, 2]]) == {}
+
+    monkeypatch.setattr(refine, "run_one", _raced_run)
+    done = refine.refine(refinement, tmp_path / "out", workers=1)
+    printed = capsys.readouterr().out
+    assert sorted(zip(done["candidate"], done["seed"])) == [
+        ("defaults", 1000), ("defaults", 1001), ("defaults", 1002), ("defaults", 1003),
+        ("greedy", 1000), ("greedy", 1001)]
+    assert "[refine fsr] greedy dropped after seed 1001" in printed and "[refine fsr 6/6," in printed
+    text = refine.section(refinement, done)
+    assert "Not finished" not in text and "- `greedy`: dropped after seed 1001" in text
+    assert "Chosen by the refinement's rule (the lowest mean L_R): `defaults`" in text
+    # Resumed: the same decision from the file, nothing left to run.
+    refine.refine(refinement, tmp_path / "out", workers=1)
+    assert "0 to run, 1 worker(s); dropped by racing: greedy" in capsys.readouterr().out
+
+    (folder / "refine" / "fsr.yaml").write_text(
+        "learner: fsr\nseeds: [1000, 1001]\nracing: {min_seeds: 3, p_value: 0.05}\ncandidates: {a: {values: {}}}\n")
+    with pytest.raises(SearchSpaceError, match=r"racing.min_seeds must be in 2..2 \(the seeds\)"):
+        refine.load_refinement("fsr", folder, scale="smoke")
+
+
 def test_a_diverged_run_scores_zero_reward_for_the_rest_of_its_budget():
     import re
 
