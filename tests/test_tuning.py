@@ -292,6 +292,32 @@ def _raced_run(space, candidate, seed):
     return {"candidate": candidate.name, "seed": seed, "reward_loss": RACE[candidate.name][seed - 1000]}
 
 
+def _failing_run(space, candidate, seed):
+    if candidate.name == "greedy":
+        raise RuntimeError("the launcher went away")
+    return _raced_run(space, candidate, seed)
+
+
+def test_a_failed_refinement_run_keeps_the_finished_ones_and_raises(tmp_path, monkeypatch):
+    import shutil
+
+    from mediated_transfer.tuning import refine
+    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
+
+    folder = tmp_path / "spaces"
+    (folder / "refine").mkdir(parents=True)
+    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
+    (folder / "refine" / "fsr.yaml").write_text(
+        "learner: fsr\nseeds: [1000, 1001]\ncandidates:\n"
+        "  defaults: {from: provisional defaults, values: {}}\n  greedy: {from: a test, values: {}}\n")
+    monkeypatch.setattr(refine, "run_one", _failing_run)
+    with pytest.raises(RuntimeError, match="the launcher went away"):
+        refine.refine(refine.load_refinement("fsr", folder, scale="smoke"), tmp_path / "out", workers=1)
+    # Nothing started after the failure; what finished before it is in the file.
+    saved = (tmp_path / "out" / refine.REFINE_FILE).read_text().splitlines()
+    assert len(saved) == 2 and saved[1].startswith("defaults,1000,10.0")
+
+
 def test_racing_drops_a_clearly_worse_candidate_and_runs_it_no_more(tmp_path, capsys, monkeypatch):
     import shutil
 
@@ -311,8 +337,9 @@ def test_racing_drops_a_clearly_worse_candidate_and_runs_it_no_more(tmp_path, ca
     rows = _refine_rows({name: losses[:2] for name, losses in RACE.items()}, first_seed=1000)
     assert refine.dropped(refinement, rows.iloc[[0, 2]]) == {}
     out = refine.dropped(refinement, rows)
-    assert list(out) == ["greedy"] and out["greedy"].startswith("dropped after seed 1001 (2 seeds): L_R 105.0 against `defaults`'s 11.0")
-    assert "p = 0.014" in out["greedy"]
+    assert list(out) == ["greedy"] and out["greedy"].seed == 1001
+    assert out["greedy"].why.startswith("dropped after seed 1001 (2 seeds): L_R 105.0 against `defaults`'s 11.0")
+    assert "p = 0.014" in out["greedy"].why
     # A seed not every remaining candidate has run decides nothing.
     assert refine.dropped(refinement, rows.iloc[[0, 1, 2]]) == {}
 
@@ -325,7 +352,13 @@ def test_racing_drops_a_clearly_worse_candidate_and_runs_it_no_more(tmp_path, ca
     assert "[refine fsr] greedy dropped after seed 1001" in printed and "[refine fsr 6/6," in printed
     text = refine.section(refinement, done)
     assert "Not finished" not in text and "- `greedy`: dropped after seed 1001" in text
+    assert "| greedy | a test | 2 (dropped) | 105.0 ± 5.0 |" in text
     assert "Chosen by the refinement's rule (the lowest mean L_R): `defaults`" in text
+    # A run of greedy under way at the drop and finished after it changes neither the table
+    # nor the choice, even where it, or the leader's later seeds, would make greedy the best.
+    late = _refine_rows({"defaults": [10, 12, 200, 200], "greedy": [100, 110, 0]}, first_seed=1000)
+    assert "| greedy | a test | 2 (dropped) | 105.0 ± 5.0 |" in refine.section(refinement, late)
+    assert refine.choose(refinement, late)[0] == "defaults"
     # Resumed: the same decision from the file, nothing left to run.
     refine.refine(refinement, tmp_path / "out", workers=1)
     assert "0 to run, 1 worker(s); dropped by racing: greedy" in capsys.readouterr().out

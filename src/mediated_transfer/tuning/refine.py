@@ -7,11 +7,15 @@ of the searched keys with where it comes from. Every (candidate, seed) run is ap
 ``tuning/<learner>/refine.csv`` as it finishes, so an interrupted refinement resumes, and the
 file is committed so Table I rebuilds without rerunning.
 
-A refinement file may race its candidates (``racing``; F-race, Birattari et al. 2002): after
-each seed every remaining candidate has run, from ``min_seeds`` seeds on, a candidate whose mean
-L_R is above the leader's by more than the leader's SEM, and worse than the leader's on those
-seeds by a one-sided paired t-test at ``p_value``, gets no more runs. The decision is a function
-of the rows in seed order, so a resumed refinement drops exactly the same candidates.
+A refinement file may race its candidates (``racing``: the racing of Birattari et al. 2002,
+with a paired t-test against the leader rather than F-race's Friedman test): after each seed
+every remaining candidate has run, from ``min_seeds`` seeds on, a candidate whose mean L_R is
+above the leader's by more than the leader's SEM, and worse than the leader's on those seeds by
+a one-sided paired t-test at ``p_value``, gets no more runs. The test is repeated at every seed
+against a leader picked from the same data, so the chance of dropping a candidate as good as
+the leader is above ``p_value``; the SEM margin guards the candidates the choice could still
+pick. The decision is a function of the rows in seed order, so a resumed refinement drops
+exactly the same candidates, and a dropped candidate's table counts its runs up to the drop.
 
     python -m mediated_transfer.tuning.refine rbf [--workers 2]
 """
@@ -69,6 +73,14 @@ class Racing:
 
 
 @dataclass(frozen=True)
+class Drop:
+    """A candidate racing dropped: after which seed, and why (markdown)."""
+
+    seed: int
+    why: str
+
+
+@dataclass(frozen=True)
 class Refinement:
     space: SearchSpace
     seeds: tuple[int, ...]
@@ -111,8 +123,8 @@ def load_refinement(learner: str, folder: Path = SEARCH_SPACE_DIR, scale: str | 
         raise SearchSpaceError(f"{path.name}: choice {choice!r} needs a run cost, known for the dqn learner only")
     racing = data.get("racing")
     if racing is not None:
-        if set(racing) != {"min_seeds", "p_value"}:
-            raise SearchSpaceError(f"{path.name}: racing needs exactly min_seeds and p_value, got {', '.join(racing)}")
+        if not isinstance(racing, dict) or set(racing) != {"min_seeds", "p_value"}:
+            raise SearchSpaceError(f"{path.name}: racing needs exactly min_seeds and p_value, got {racing!r}")
         racing = Racing(int(racing["min_seeds"]), float(racing["p_value"]))
         if not 2 <= racing.min_seeds <= len(seeds) or not 0 < racing.p_value < 1:
             raise SearchSpaceError(f"{path.name}: racing.min_seeds must be in 2..{len(seeds)} (the seeds) and "
@@ -124,9 +136,9 @@ def _is_dqn(space: SearchSpace) -> bool:
     return space.learner_pair().startswith("dqn_")
 
 
-def dropped(refinement: Refinement, rows: pd.DataFrame) -> dict[str, str]:
-    """The candidates racing has dropped given ``rows``, each with why (markdown); {} without
-    racing. Seeds are taken in order, each once every remaining candidate has run it."""
+def dropped(refinement: Refinement, rows: pd.DataFrame) -> dict[str, Drop]:
+    """The candidates racing has dropped given ``rows``; {} without racing. Seeds are taken in
+    order, each once every remaining candidate has run it."""
     racing = refinement.racing
     if racing is None:
         return {}
@@ -148,8 +160,8 @@ def dropped(refinement: Refinement, rows: pd.DataFrame) -> dict[str, str]:
             # A constant positive difference has no variance: the t-test has no p, the case is clear.
             p = 0.0 if np.ptp(diff) == 0 else float(stats.ttest_1samp(diff, 0.0, alternative="greater").pvalue)
             if p < racing.p_value:
-                out[c] = (f"dropped after seed {seed} ({j} seeds): L_R {per_seed[c].mean():.1f} against "
-                          f"`{leader}`'s {lead.mean():.1f}, paired t-test p = {p:.2g}")
+                out[c] = Drop(seed, f"dropped after seed {seed} ({j} seeds): L_R {per_seed[c].mean():.1f} "
+                                    f"against `{leader}`'s {lead.mean():.1f}, paired t-test p = {p:.2g}")
         alive = [c for c in alive if c not in out]
     return out
 
@@ -187,11 +199,11 @@ def refine(refinement: Refinement, folder: Path, workers: int = 1) -> pd.DataFra
     queue = deque((c, s) for c, s in refinement.runs() if (c.name, s) not in have and c.name not in out)
     print(f"[refine {refinement.space.learner}] {len(have)} runs done, {len(queue)} to run, {workers} worker(s)"
           + (f"; dropped by racing: {', '.join(out)}" if out else ""))
-    finished, start, running = 0, time.monotonic(), {}
+    finished, start, running, errors = 0, time.monotonic(), {}, []
     with ProcessPoolExecutor(max_workers=workers) as pool:
         # Submitted as workers free up, so a candidate dropped meanwhile starts no further run.
         def fill() -> None:
-            while queue and len(running) < workers:
+            while queue and len(running) < workers and not errors:
                 c, s = queue.popleft()
                 if c.name not in out:
                     running[pool.submit(run_one, refinement.space, c, s)] = c.name
@@ -199,29 +211,38 @@ def refine(refinement: Refinement, folder: Path, workers: int = 1) -> pd.DataFra
         while running:
             for future in wait(running, return_when=FIRST_COMPLETED).done:
                 del running[future]
+                if future.exception() is not None:
+                    errors.append(future.exception())  # raised once the runs still going are saved
+                    continue
                 row = future.result()
                 # One writer (this process), one appended line per finished run: nothing is lost.
                 pd.DataFrame([row], columns=COLUMNS).to_csv(path, mode="a", header=not path.is_file(), index=False)
                 rows = pd.concat([rows, pd.DataFrame([row], columns=COLUMNS)], ignore_index=True)
                 finished += 1
-                newly = {c: why for c, why in dropped(refinement, rows).items() if c not in out}
+                newly = {c: drop for c, drop in dropped(refinement, rows).items() if c not in out}
                 out.update(newly)
                 left_runs = len(running) + sum(c.name not in out for c, _ in queue)
                 left = (time.monotonic() - start) / finished * left_runs
                 print(f"[refine {refinement.space.learner} {len(have) + finished}/{len(have) + finished + left_runs}, "
                       f"~{duration(left)} left] {row['candidate']} seed={row['seed']}: L_R {row['reward_loss']:.1f}",
                       flush=True)
-                for c, why in newly.items():
-                    print(f"[refine {refinement.space.learner}] {c} {why}", flush=True)
+                for c, drop in newly.items():
+                    print(f"[refine {refinement.space.learner}] {c} {drop.why}", flush=True)
             fill()
+    if errors:
+        raise errors[0]
     return pd.read_csv(path)
 
 
 def summary(refinement: Refinement, rows: pd.DataFrame) -> pd.DataFrame:
-    """Per candidate: runs, mean L_R +/- SEM, mean learning span, runs reaching <R> >= 8."""
-    out = []
+    """Per candidate: runs, mean L_R +/- SEM, mean learning span, runs reaching <R> >= 8, and
+    whether racing dropped it (then over its seeds up to the drop: a run that was under way
+    at the drop counts or not by chance)."""
+    out, drops = [], dropped(refinement, rows)
     for c in refinement.candidates:
-        mine = rows[(rows["candidate"] == c.name) & rows["seed"].isin(refinement.seeds)]
+        drop = drops.get(c.name)
+        seeds = refinement.seeds if drop is None else refinement.seeds[:refinement.seeds.index(drop.seed) + 1]
+        mine = rows[(rows["candidate"] == c.name) & rows["seed"].isin(seeds)]
         losses = mine["reward_loss"].to_numpy(float)
         spans = mine["learning_span"].dropna().to_numpy(float)
         out.append({
@@ -231,6 +252,7 @@ def summary(refinement: Refinement, rows: pd.DataFrame) -> pd.DataFrame:
             "learning_span_mean": float(spans.mean()) if len(spans) else math.nan,
             "reached": int(mine["first_threshold_step"].notna().sum()),
             "update_cost": update_cost(c.values) if _is_dqn(refinement.space) else math.nan,
+            "dropped": drop is not None,
         })
     return pd.DataFrame(out).sort_values("reward_loss_mean", kind="stable").reset_index(drop=True)
 
@@ -239,7 +261,7 @@ def choose(refinement: Refinement, rows: pd.DataFrame) -> tuple[str, str] | None
     """The candidate the refinement's rule picks from the runs so far, and why in a sentence
     (markdown); None before any run."""
     table = summary(refinement, rows).dropna(subset=["reward_loss_mean"])
-    table = table[~table["candidate"].isin(dropped(refinement, rows))]
+    table = table[~table["dropped"]]
     if table.empty:
         return None
     best = table.iloc[0]
@@ -279,7 +301,7 @@ def section(refinement: Refinement, rows: pd.DataFrame) -> str:
     out = dropped(refinement, rows)
     done = int(table["runs"].sum())
     # A dropped candidate's runs so far are all it will have.
-    planned = sum(r["runs"] if r["candidate"] in out else len(refinement.seeds) for _, r in table.iterrows())
+    planned = sum(r["runs"] if r["dropped"] else len(refinement.seeds) for _, r in table.iterrows())
     if done < planned:
         lines[0] += (f" **Not finished: {done} of {planned} runs so far** (seed by seed, so the "
                      "candidates share their seeds).")
@@ -289,12 +311,13 @@ def section(refinement: Refinement, rows: pd.DataFrame) -> str:
         values = [_fmt(by_name[r["candidate"]].values[k]) for k in keys]
         span = "-" if math.isnan(r["learning_span_mean"]) else f"{r['learning_span_mean']:,.0f}"
         cost = f"{r['update_cost'] / unit:.2g}x | " if costs else ""
-        lines.append(f"| {r['candidate']} | {r['from']} | {r['runs']} | {_loss(r)} | {span} | "
+        runs = f"{r['runs']} (dropped)" if r["dropped"] else str(r["runs"])
+        lines.append(f"| {r['candidate']} | {r['from']} | {runs} | {_loss(r)} | {span} | "
                      f"{r['reached']}/{r['runs']} | {cost}" + " | ".join(values) + " |")
     if out:
         lines += ["", f"Racing (from {refinement.racing.min_seeds} seeds on; one-sided paired t-test against the "
                       f"leader at p < {refinement.racing.p_value:g}) dropped:", ""]
-        lines += [f"- `{c}`: {why}" for c, why in out.items()]
+        lines += [f"- `{c}`: {drop.why}" for c, drop in out.items()]
     chosen = choose(refinement, rows)
     if chosen is not None:
         lines += ["", f"{'Chosen' if done == planned else '**Leading so far**'} by the refinement's rule "
