@@ -176,19 +176,23 @@ def test_a_study_refuses_to_continue_with_another_search_space(space, tmp_path):
         study_module.prepare(StudyPlan(other, folder, trials=1))
 
 
-def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, capsys):
+def _refine_folder(tmp_path, learner: str, text: str):
+    """A search-space folder holding ``learner``'s search space and ``text`` as its refinement file."""
     import shutil
 
-    from mediated_transfer.tuning import refine
-    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
-
     folder = tmp_path / "spaces"
-    (folder / "refine").mkdir(parents=True)
-    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
-    (folder / "refine" / "fsr.yaml").write_text(
-        "learner: fsr\nseeds: [1000, 1001]\ncandidates:\n"
-        "  defaults: {from: provisional defaults, values: {}}\n"
-        "  greedy: {from: a test, values: {algorithm.epsilon: 0.01}}\n")
+    (folder / "refine").mkdir(parents=True, exist_ok=True)
+    shutil.copy(find_search_space(learner).path, folder)
+    (folder / "refine" / f"{learner}.yaml").write_text(text)
+    return folder
+
+
+def test_refinement_runs_each_candidate_on_each_seed_once_and_resumes(tmp_path, capsys):
+    from mediated_transfer.tuning import refine
+
+    folder = _refine_folder(tmp_path, "fsr", "learner: fsr\nseeds: [1000, 1001]\ncandidates:\n"
+                            "  defaults: {from: provisional defaults, values: {}}\n"
+                            "  greedy: {from: a test, values: {algorithm.epsilon: 0.01}}\n")
     refinement = refine.load_refinement("fsr", folder, scale="smoke")
     assert [c.name for c in refinement.candidates] == ["defaults", "greedy"]
     assert refinement.candidates[1].values["algorithm.epsilon"] == 0.01
@@ -227,16 +231,10 @@ def _refine_rows(losses: dict[str, list[float]], first_seed: int = 1003):
 
 
 def _dqn_refinement(tmp_path, choice: str | None):
-    import shutil
-
     from mediated_transfer.tuning import refine
-    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
 
-    folder = tmp_path / "spaces"
-    (folder / "refine").mkdir(parents=True, exist_ok=True)
-    shutil.copy(SEARCH_SPACE_DIR / "dqn.yaml", folder)
-    (folder / "refine" / "dqn.yaml").write_text(
-        "learner: dqn\nseeds: [1003, 1004, 1005]\n" + (f"choice: {choice}\n" if choice else "")
+    folder = _refine_folder(
+        tmp_path, "dqn", "learner: dqn\nseeds: [1003, 1004, 1005]\n" + (f"choice: {choice}\n" if choice else "")
         + "candidates:\n"
         "  costly: {from: a test, values: {algorithm.train_frequency: 1, algorithm.batch_size: 128}}\n"
         "  cheap: {from: a test, values: {algorithm.train_frequency: 4, algorithm.batch_size: 32}}\n"
@@ -269,17 +267,12 @@ def test_refinement_choice_lowest_mean_or_the_cheapest_within_one_sem(tmp_path):
 
 
 def test_refinement_choice_is_checked_before_any_run(tmp_path):
-    import shutil
-
     from mediated_transfer.tuning import refine
-    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
 
     with pytest.raises(SearchSpaceError, match=r"choice must be one of lowest_mean, cheapest_within_one_sem, got 'cheapest'"):
         _dqn_refinement(tmp_path, "cheapest")
-    folder = tmp_path / "spaces"
-    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
-    (folder / "refine" / "fsr.yaml").write_text(
-        "learner: fsr\nseeds: [1000]\nchoice: cheapest_within_one_sem\ncandidates: {a: {values: {}}}\n")
+    folder = _refine_folder(
+        tmp_path, "fsr", "learner: fsr\nseeds: [1000]\nchoice: cheapest_within_one_sem\ncandidates: {a: {values: {}}}\n")
     with pytest.raises(SearchSpaceError, match="needs a run cost, known for the dqn learner only"):
         refine.load_refinement("fsr", folder, scale="smoke")
 
@@ -299,17 +292,10 @@ def _failing_run(space, candidate, seed):
 
 
 def test_a_failed_refinement_run_keeps_the_finished_ones_and_raises(tmp_path, monkeypatch):
-    import shutil
-
     from mediated_transfer.tuning import refine
-    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
 
-    folder = tmp_path / "spaces"
-    (folder / "refine").mkdir(parents=True)
-    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
-    (folder / "refine" / "fsr.yaml").write_text(
-        "learner: fsr\nseeds: [1000, 1001]\ncandidates:\n"
-        "  defaults: {from: provisional defaults, values: {}}\n  greedy: {from: a test, values: {}}\n")
+    folder = _refine_folder(tmp_path, "fsr", "learner: fsr\nseeds: [1000, 1001]\ncandidates:\n"
+                            "  defaults: {from: provisional defaults, values: {}}\n  greedy: {from: a test, values: {}}\n")
     monkeypatch.setattr(refine, "run_one", _failing_run)
     with pytest.raises(RuntimeError, match="the launcher went away"):
         refine.refine(refine.load_refinement("fsr", folder, scale="smoke"), tmp_path / "out", workers=1)
@@ -319,17 +305,11 @@ def test_a_failed_refinement_run_keeps_the_finished_ones_and_raises(tmp_path, mo
 
 
 def test_racing_drops_a_clearly_worse_candidate_and_runs_it_no_more(tmp_path, capsys, monkeypatch):
-    import shutil
-
     from mediated_transfer.tuning import refine
-    from mediated_transfer.tuning.space import SEARCH_SPACE_DIR
 
-    folder = tmp_path / "spaces"
-    (folder / "refine").mkdir(parents=True)
-    shutil.copy(SEARCH_SPACE_DIR / "linear_q_fsr.yaml", folder)
-    (folder / "refine" / "fsr.yaml").write_text(
-        "learner: fsr\nseeds: [1000, 1001, 1002, 1003]\nracing: {min_seeds: 2, p_value: 0.05}\ncandidates:\n"
-        "  defaults: {from: provisional defaults, values: {}}\n"
+    folder = _refine_folder(
+        tmp_path, "fsr", "learner: fsr\nseeds: [1000, 1001, 1002, 1003]\nracing: {min_seeds: 2, p_value: 0.05}\n"
+        "candidates:\n  defaults: {from: provisional defaults, values: {}}\n"
         "  greedy: {from: a test, values: {algorithm.epsilon: 0.01}}\n")
     refinement = refine.load_refinement("fsr", folder, scale="smoke")
     # After seed 1000 alone nothing is decided; after 1001: greedy is worse by 94 (leader's SEM 1),
