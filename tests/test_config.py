@@ -135,6 +135,9 @@ def test_experiment_sweep_covers_exactly_the_papers_rows_times_seeds(hydra_conte
     assert len(jobs) == len(cells) * len(seeds) == len({tuple(sorted(j)) for j in jobs})
     for cell in cells:
         assert sorted(_seed(j) for j in jobs if _cell(j) == cell) == seeds
+    # Seed by seed, each seed over the paper's rows: a sweep stopped midway has every row.
+    assert [_seed(j) for j in jobs] == sorted(_seed(j) for j in jobs)
+    assert [_cell(j) for j in jobs[:len(cells)]] == [p.cell for p in paper_rows(PAPER_TABLE[experiment])]
     job_cfg = _compose(*jobs[-1])  # a job composes as the sweep will run it
     assert job_cfg.name == experiment and job_cfg.cell == _cell(jobs[-1])
     assert (job_cfg.algorithm.name, job_cfg.representation.name) == LEARNER[experiment]
