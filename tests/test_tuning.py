@@ -266,6 +266,20 @@ def test_refinement_choice_lowest_mean_or_the_cheapest_within_one_sem(tmp_path):
     assert refine.choose(rule, rows.iloc[:0]) is None
 
 
+def test_refinement_time_left_weighs_each_run_by_its_update_cost(tmp_path):
+    import time
+
+    from mediated_transfer.tuning import refine
+
+    rule = _dqn_refinement(tmp_path, None)
+    by_name = {c.name: c for c in rule.candidates}
+    per_work = 60.0 / refine.update_cost(by_name["cheap"].values)  # a cheap run: a minute
+    # A costly run (16x) under way for 5 minutes, a cheap and a middle one (2x) waiting.
+    running = [(by_name["costly"], time.monotonic() - 300)]
+    left = refine._compute_left(rule, per_work, running, [by_name["cheap"], by_name["middle"]])
+    assert left == pytest.approx(16 * 60 - 300 + 60 + 2 * 60, abs=2)
+
+
 def test_refinement_choice_is_checked_before_any_run(tmp_path):
     from mediated_transfer.tuning import refine
 

@@ -166,6 +166,20 @@ def dropped(refinement: Refinement, rows: pd.DataFrame) -> dict[str, Drop]:
     return out
 
 
+def _work(refinement: Refinement, candidate: Candidate) -> float:
+    """A run's share of the refinement's compute, for the time left: its update cost for the
+    DQN, whose candidates' runs differ 16-fold; 1 for any other learner."""
+    return update_cost(candidate.values) if _is_dqn(refinement.space) else 1.0
+
+
+def _compute_left(refinement: Refinement, per_work: float, running, waiting) -> float:
+    """Seconds of compute left at ``per_work`` seconds per unit of work: the runs waiting, and
+    what remains of those under way ((candidate, start time) pairs)."""
+    now = time.monotonic()
+    return (sum(max(0.0, per_work * _work(refinement, c) - (now - started)) for c, started in running)
+            + per_work * sum(_work(refinement, c) for c in waiting))
+
+
 def update_cost(values: dict[str, Any]) -> float:
     """Nominal FLOPs of gradient updates per learning step of a DQN candidate: the part of a
     run's cost the candidates change (batch size, train frequency; the environment's share is
@@ -199,18 +213,20 @@ def refine(refinement: Refinement, folder: Path, workers: int = 1) -> pd.DataFra
     queue = deque((c, s) for c, s in refinement.runs() if (c.name, s) not in have and c.name not in out)
     print(f"[refine {refinement.space.learner}] {len(have)} runs done, {len(queue)} to run, {workers} worker(s)"
           + (f"; dropped by racing: {', '.join(out)}" if out else ""))
-    finished, start, running, errors = 0, time.monotonic(), {}, []
+    # The time left, from the time per unit of work so far: a DQN candidate's run costs 1x to 16x.
+    finished, spent, done_work, running, errors = 0, 0.0, 0.0, {}, []
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        # Submitted as workers free up, so a candidate dropped meanwhile starts no further run.
+        # Submitted as workers free up (so a run starts when it is submitted), and a candidate
+        # dropped meanwhile starts no further run.
         def fill() -> None:
             while queue and len(running) < workers and not errors:
                 c, s = queue.popleft()
                 if c.name not in out:
-                    running[pool.submit(run_one, refinement.space, c, s)] = c.name
+                    running[pool.submit(run_one, refinement.space, c, s)] = (c, time.monotonic())
         fill()
         while running:
             for future in wait(running, return_when=FIRST_COMPLETED).done:
-                del running[future]
+                candidate, started = running.pop(future)
                 if future.exception() is not None:
                     errors.append(future.exception())  # raised once the runs still going are saved
                     continue
@@ -219,13 +235,14 @@ def refine(refinement: Refinement, folder: Path, workers: int = 1) -> pd.DataFra
                 pd.DataFrame([row], columns=COLUMNS).to_csv(path, mode="a", header=not path.is_file(), index=False)
                 rows = pd.concat([rows, pd.DataFrame([row], columns=COLUMNS)], ignore_index=True)
                 finished += 1
+                spent, done_work = spent + time.monotonic() - started, done_work + _work(refinement, candidate)
                 newly = {c: drop for c, drop in dropped(refinement, rows).items() if c not in out}
                 out.update(newly)
-                left_runs = len(running) + sum(c.name not in out for c, _ in queue)
-                left = (time.monotonic() - start) / finished * left_runs
-                print(f"[refine {refinement.space.learner} {len(have) + finished}/{len(have) + finished + left_runs}, "
-                      f"~{duration(left)} left] {row['candidate']} seed={row['seed']}: L_R {row['reward_loss']:.1f}",
-                      flush=True)
+                waiting = [c for c, _ in queue if c.name not in out]
+                total = len(have) + finished + len(running) + len(waiting)
+                left = _compute_left(refinement, spent / done_work, running.values(), waiting) / workers
+                print(f"[refine {refinement.space.learner} {len(have) + finished}/{total}, ~{duration(left)} left] "
+                      f"{row['candidate']} seed={row['seed']}: L_R {row['reward_loss']:.1f}", flush=True)
                 for c, drop in newly.items():
                     print(f"[refine {refinement.space.learner}] {c} {drop.why}", flush=True)
             fill()
