@@ -57,6 +57,9 @@ def _companions(option: str) -> list[str]:
     group, name = option.split("=")
     if group == "n_source" and name != "0":
         return ["strategy=regular"]
+    if group == "tuned" and name != "provisional":  # tuned values compose with their own learner
+        algorithm, representation = _learner_of(name)
+        return [f"algorithm={algorithm}", f"representation={representation}"]
     return COMPANIONS.get(option, [])
 
 
