@@ -38,3 +38,22 @@ def test_a_probe_is_a_short_real_run_of_the_tables_configuration():
     assert probe["algorithm"] == "linear_q" and probe["probe_steps"] == 200
     assert (probe["paper_budget"], probe["paper_eval_points"]) == (500_000, 25)
     assert probe["steps_per_s"] > 0 and probe["eval_s_per_point"] > 0
+
+
+def test_the_steady_rate_skips_the_warm_up_and_the_final_evaluation():
+    # 1,000 steps/s while warming up (to 2,000), then 500 steps/s; the mark at the end (4,000)
+    # also holds the probe's evaluation and is left out.
+    marks = {1000: 1.0, 2000: 2.0, 3000: 4.0, 4000: 60.0}
+    assert projection.steady_rate(marks, warm_up=2000, budget=4000) == pytest.approx(500.0)
+    assert projection.steady_rate(marks, warm_up=0, budget=4000) == pytest.approx(2000 / 3.0)
+    assert projection.steady_rate({200: 1.0}, warm_up=0, budget=200) is None
+
+
+def test_the_dqn_probe_starts_timing_after_its_warm_up():
+    from mediated_transfer.config.compose import compose_config
+    from mediated_transfer.config.spec import run_spec
+
+    dqn = run_spec(compose_config(["experiment=table4_dnn", "cell=none_0", "scale=paper"]))
+    rbf = run_spec(compose_config(["experiment=table2_rbf", "cell=none_0", "scale=paper"]))
+    assert projection.warm_up_steps(dqn) == dqn.algorithm_params["learning_starts"] > 0
+    assert projection.warm_up_steps(rbf) == 0
