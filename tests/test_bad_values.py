@@ -181,6 +181,9 @@ def test_each_key_runs_a_tiny_run_at_an_accepted_edge(learner, key):
     ("seed=-1", "seed"),
     ("n_source=-1", "n_source=-1"),
     ("threads_per_run=0", "threads_per_run"),
+    ("lockstep.runs=0", "lockstep.runs"),
+    ("lockstep.device=gpu", "lockstep.device"),
+    ("lockstep.device=cuda", "lockstep.device=cuda"),  # the default learner is linear
     ("env.interaction_radius=2.5", "env.interaction_radius=2.5"),
 ])
 def test_the_command_line_refuses_in_one_line(override, named):

@@ -109,7 +109,7 @@ def test_tracking_options_give_settings_or_disable_tracking(hydra_context, optio
 
 
 @pytest.mark.parametrize("launcher, target", [
-    ("parallel", "hydra_plugins.hydra_joblib_launcher.joblib_launcher.JoblibLauncher"),
+    ("parallel", "hydra_plugins.mediated_transfer_launcher.local_launcher.MediatedJoblibLauncher"),
     ("submitit_local", "hydra_plugins.hydra_submitit_launcher.submitit_launcher.LocalLauncher"),
     ("slurm", "hydra_plugins.mediated_transfer_launcher.slurm_launcher.MediatedSlurmLauncher"),
     ("basic", "hydra._internal.core_plugins.basic_launcher.BasicLauncher"),
@@ -121,8 +121,13 @@ def test_launcher_presets_compose_and_name_an_importable_launcher(hydra_context,
 
 
 def test_default_launcher_is_joblib_with_one_worker_per_core(hydra_context):
+    from hydra_plugins.hydra_joblib_launcher.joblib_launcher import JoblibLauncher
+
     launcher = _compose(hydra=True).hydra.launcher
-    assert launcher._target_.endswith("JoblibLauncher") and launcher.n_jobs == -1
+    assert issubclass(get_class(launcher._target_), JoblibLauncher) and launcher.n_jobs == -1
+    # Without lockstep groups (the CPU default), one job per run, as Hydra's joblib launcher.
+    cfg = _compose(hydra=True)
+    assert cfg.lockstep.runs is None and cfg.lockstep.device == "cpu"
 
 
 @pytest.mark.parametrize("experiment", sorted(PAPER_TABLE))

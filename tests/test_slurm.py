@@ -277,7 +277,7 @@ def test_resubmitting_a_finished_sweep_submits_nothing(tmp_path, monkeypatch):
 
     submitted = []
 
-    def submit(self, groups, name, errors):
+    def submit(self, groups, name, errors, lockstep=False):
         submitted.extend(name[r.folder] for group in groups for r in group)
         return []
 
@@ -288,3 +288,30 @@ def test_resubmitting_a_finished_sweep_submits_nothing(tmp_path, monkeypatch):
     (tmp_path / "multirun/table2_rbf/smoke/none_0/seed=0/result.json").unlink()
     _run_cli(*common, "hydra/launcher=slurm")
     assert submitted == ["none_0/seed=0"]
+
+
+@pytest.mark.slow
+def test_lockstep_submits_one_job_per_group_of_a_cells_unfinished_seeds(tmp_path, monkeypatch):
+    from hydra_plugins.mediated_transfer_launcher import slurm_launcher
+
+    from .test_sweep import _common, _run_cli
+    from .test_tracking import fresh_store
+
+    fresh_store(tmp_path)
+    common = ["experiment=table2_rbf", "cell=none_0,regular_1", *_common(tmp_path, tmp_path / "cache"),
+              "scale.seeds=3"]
+    _run_cli(*common, "seed=1", "hydra/launcher=basic")  # none_0 and regular_1 seed 1 are finished
+    monkeypatch.setattr(cluster, "partitions", lambda: cluster.parse_sinfo(SINFO))
+    monkeypatch.setattr(cluster, "queue", lambda: {})
+    submitted = []
+
+    def submit(self, groups, name, errors, lockstep=False):
+        submitted.append((lockstep, sorted(sorted(name[r.folder] for r in group) for group in groups)))
+        return []
+
+    monkeypatch.setattr(slurm_launcher.MediatedSlurmLauncher, "_submit", submit)
+    _run_cli(*common, "hydra/launcher=slurm", "lockstep.runs=2")
+    assert submitted == [(True, [["none_0/seed=0", "none_0/seed=2"], ["regular_1/seed=0", "regular_1/seed=2"]])]
+    submitted.clear()
+    _run_cli(*common, "hydra/launcher=slurm", "hydra.launcher.runs_per_job=2")  # no lockstep: packed
+    assert submitted == [(False, [["none_0/seed=0", "regular_1/seed=0"], ["none_0/seed=2", "regular_1/seed=2"]])]

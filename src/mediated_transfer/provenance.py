@@ -36,30 +36,35 @@ LEARNER_SOURCES = {
 nor the other way round. A file listed for several algorithms counts for each of them."""
 NOT_COMPUTING = ("env/render.py", "env/animate.py", "env/scripted.py")
 """In the computing folders but never called by a run: drawing, GIFs, scripted policies."""
+LOCKSTEP_SOURCES = ("lockstep",)
+"""The lockstep loop and its learner groups: in the digest of the runs they computed only, so a
+change there does not make single runs stale (nor adding it, the results it reproduces)."""
 
 
 @functools.cache
-def code_version(algorithm: str | None = None) -> dict[str, Any]:
+def code_version(algorithm: str | None = None, lockstep: bool = False) -> dict[str, Any]:
     """``{"commit", "dirty", "digest"}`` of the code in this process (commit/dirty None without
     git); with ``algorithm``, the digest covers only the code that runs it, and the record
-    says so (``"algorithm"``)."""
+    says so (``"algorithm"``); with ``lockstep``, it covers the lockstep loop too (``"lockstep"``)."""
     version = {"commit": _git("rev-parse", "HEAD"), "dirty": _dirty(),
-               "digest": source_digest(algorithm=algorithm)}
+               "digest": source_digest(algorithm=algorithm, lockstep=lockstep)}
     if algorithm is not None:
         version["algorithm"] = algorithm
+    if lockstep:
+        version["lockstep"] = True
     return version
 
 
-def source_digest(package: Path = PACKAGE, algorithm: str | None = None) -> str:
+def source_digest(package: Path = PACKAGE, algorithm: str | None = None, lockstep: bool = False) -> str:
     """Digest of the computing sources' syntax trees, without the files only other algorithms
-    run: comments, docstrings and layout do not change what a run computes, so they do not
-    change the digest."""
+    run (and the lockstep loop's, unless ``lockstep``): comments, docstrings and layout do not
+    change what a run computes, so they do not change the digest."""
     others = set(NOT_COMPUTING)
     if algorithm is not None:
         others |= {file for name, files in LEARNER_SOURCES.items() if name != algorithm for file in files}
         others -= set(LEARNER_SOURCES.get(algorithm, ()))
     digest = hashlib.sha256()
-    for entry in COMPUTING_SOURCES:
+    for entry in COMPUTING_SOURCES + (LOCKSTEP_SOURCES if lockstep else ()):
         path = package / entry
         files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
         for file in files:
@@ -85,7 +90,7 @@ def staleness(recorded: dict[str, Any] | None, results_format: int | None) -> st
     """Why a result recorded with ``recorded`` code is stale now; None when it is current."""
     if results_format != RESULTS_FORMAT:
         return f"results format {results_format or 1}, current {RESULTS_FORMAT}"
-    current = code_version((recorded or {}).get("algorithm"))
+    current = code_version((recorded or {}).get("algorithm"), bool((recorded or {}).get("lockstep")))
     if not recorded or recorded.get("digest") != current["digest"]:
         commit = (recorded or {}).get("commit") or "unknown"
         dirty = " (dirty)" if (recorded or {}).get("dirty") else ""

@@ -4,7 +4,9 @@ Hydra instantiates launchers only from the ``hydra_plugins`` package, hence this
 parts live in mediated_transfer.slurm. On top of submitit's launcher it
 - checks the request against the partition first (sinfo), in one line,
 - settles finished runs here instead of submitting jobs that only skip them,
-- packs ``runs_per_job`` runs into each job (Python starts once per job, not per run),
+- packs ``runs_per_job`` runs into each job (Python starts once per job, not per run), or, when
+  ``lockstep.runs`` (or a GPU device) asks for lockstep groups, one group of a cell's seeds per
+  job, trained together (mediated_transfer.lockstep),
 - attaches to the jobs of an earlier launch that are still queued (the sweep's ledger),
 - waits with progress lines in this terminal, or returns at once with ``wait=false``,
 - ends with one line per failed job or run instead of submitit's tracebacks.
@@ -20,7 +22,7 @@ from typing import Any, Sequence
 
 from hydra.core.config_store import ConfigStore
 from hydra.core.singleton import Singleton
-from hydra.core.utils import JobReturn, JobStatus
+from hydra.core.utils import JobReturn, JobStatus, setup_globals
 from hydra_plugins.hydra_submitit_launcher.config import BaseQueueConf, SlurmQueueConf
 from hydra_plugins.hydra_submitit_launcher.submitit_launcher import BaseSubmititLauncher, SlurmLauncher
 from omegaconf import OmegaConf, open_dict
@@ -69,6 +71,25 @@ class MediatedSlurmLauncher(SlurmLauncher):
             done.append((run, self(overrides, "hydra.sweep.dir", index, f"job_id_for_{index}", singleton_state)))
         return done
 
+    def run_lockstep_group(self, group: list[tuple[list[str], int, str]],
+                           singleton_state: dict) -> list[tuple[str, JobReturn]]:
+        """In the SLURM job: the group's runs as Hydra jobs (folders, logs, MLflow runs),
+        computed together in lockstep (mediated_transfer.lockstep.launch.run_group)."""
+        import submitit
+
+        from mediated_transfer.lockstep.launch import run_group
+
+        Singleton.set_state(singleton_state)
+        setup_globals()
+        jobs = []
+        for overrides, index, _ in group:
+            sweep_config = self.hydra_context.config_loader.load_sweep_config(self.config, overrides)
+            with open_dict(sweep_config.hydra.job) as job:
+                job.id = submitit.JobEnvironment().job_id
+                sweep_config.hydra.job.num = index
+            jobs.append((sweep_config, self.hydra_context))
+        return [(run, ret) for (_, _, run), ret in zip(group, run_group(jobs))]
+
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
         from mediated_transfer.config.compose import ConfigError
         from mediated_transfer.slurm.cluster import ClusterError
@@ -108,14 +129,16 @@ class MediatedSlurmLauncher(SlurmLauncher):
                 attached[entry["job"]] = watch.Submitted(self._job(entry), [])
             attached[entry["job"]].runs.append(run)
         to_submit = [r for r in pending if name[r.folder] not in live]
-        groups = jobs.group_runs(to_submit, runs_per_job)
-        submitted = self._submit(groups, name, errors) if groups else []
+        lockstep = jobs.lockstep_groups_of(to_submit)
+        groups = lockstep or jobs.group_runs(to_submit, runs_per_job)
+        submitted = self._submit(groups, name, errors, lockstep is not None) if groups else []
+        per_job = max(len(g) for g in lockstep) if lockstep else runs_per_job
         ledger.record({run: {"job": s.job.job_id, "folder": str(params["submitit_folder"])}
                        for s in submitted for run in s.runs})
         log.info("%s: %d runs; %d finished already (not submitted), %d waited for in %d queued jobs, "
                  "%d submitted in %d jobs (%d runs per job)", sweep_name, len(planned), len(finished),
                  sum(len(s.runs) for s in attached.values()), len(attached), len(to_submit),
-                 len(submitted), runs_per_job)
+                 len(submitted), per_job)
         everything = list(attached.values()) + submitted
         if not everything:
             return self._end([], failed, len(planned))
@@ -124,7 +147,7 @@ class MediatedSlurmLauncher(SlurmLauncher):
                      "these jobs and shows progress", sweep_name)
             return []
         outcome = watch.wait(everything, sweep_dir, sweep_name, float(own["progress_every_s"]),
-                             float(params["timeout_min"]), runs_per_job)
+                             float(params["timeout_min"]), per_job)
         return self._end(outcome.returns, failed + outcome.errors, len(planned))
 
     def _settle(self, finished: list, sweep_dir: Path) -> list[str]:
@@ -161,7 +184,7 @@ class MediatedSlurmLauncher(SlurmLauncher):
         executor.update_parameters(**{k if k in base else f"{self._EXECUTOR}_{k}": v for k, v in params.items()})
         return executor
 
-    def _submit(self, groups: list, name: dict, errors) -> list:
+    def _submit(self, groups: list, name: dict, errors, lockstep: bool = False) -> list:
         from submitit.core.utils import FailedJobError, FailedSubmissionError
 
         from mediated_transfer.slurm import watch
@@ -170,7 +193,8 @@ class MediatedSlurmLauncher(SlurmLauncher):
         args = [[(list(r.overrides), r.index, name[r.folder]) for r in group] for group in groups]
         executor = self._executor()
         try:
-            submitted = executor.map_array(self.run_group, args, [Singleton.get_state()] * len(args))
+            run = self.run_lockstep_group if lockstep else self.run_group
+            submitted = executor.map_array(run, args, [Singleton.get_state()] * len(args))
         except (FailedJobError, FailedSubmissionError, subprocess.CalledProcessError) as error:
             raise ClusterError(errors.sbatch_error(getattr(error, "output", None) or str(error))) from None
         return [watch.Submitted(job, [run for _, _, run in group]) for job, group in zip(submitted, args)]

@@ -4,6 +4,8 @@ Ratios, not absolute times, are the targets (they survive a slower or busier mac
   env:    Python per env step / its time inside Chipmunk's cpSpaceStep    (aim <= 1)
   linear: linear learner time per step / environment step                (aim <= 1)
   dqn:    our DQN learning steps/s / Stable-Baselines3 DQN steps/s       (aim >= 5)
+  lockstep: a tuned DQN step's breakdown; steps/s per network of K runs stepped together
+          (CPU group, stacked networks) / single runs                      (aim >= 3)
 """
 
 from __future__ import annotations
@@ -17,9 +19,10 @@ PARTS = {
     "env": "mediated_transfer.bench.env_speed",
     "linear": "mediated_transfer.bench.learner_speed",
     "dqn": "mediated_transfer.bench.dqn_speed",
+    "lockstep": "mediated_transfer.bench.lockstep_speed",
     "projection": "mediated_transfer.bench.projection",
 }
-DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "projection": None}
+DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 3_000, "projection": None}
 
 
 def main(argv: list[str] | None = None) -> int:

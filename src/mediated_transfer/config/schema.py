@@ -149,6 +149,12 @@ class ReportConfig:
 
 
 @dataclass
+class LockstepConfig:
+    runs: Optional[int] = MISSING
+    device: str = MISSING
+
+
+@dataclass
 class RunConfig:
     """The root of conf/config.yaml: one learning run. Values and comments: conf/config.yaml."""
 
@@ -161,6 +167,7 @@ class RunConfig:
     threads_per_run: int = MISSING
     rerun_stale: bool = MISSING
     save_learner: bool = MISSING
+    lockstep: LockstepConfig = MISSING
     strategy: str = MISSING
     n_source: int = MISSING
     paths: PathsConfig = MISSING

@@ -74,6 +74,27 @@ def _check_launch_keys(cfg: Mapping[str, Any]) -> None:
         value = section[name]
         if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= most:
             raise ValueError(f"{key} must be an integer in [1, {most}], got {value!r}")
+    _check_lockstep(cfg)
+
+
+def _check_lockstep(cfg: Mapping[str, Any]) -> None:
+    from ..learners.factory import SB3_ALGORITHMS
+    from ..lockstep.group import DEVICES
+
+    if "lockstep" not in cfg:  # a result recorded before lockstep existed
+        return
+    runs, device = cfg["lockstep"]["runs"], cfg["lockstep"]["device"]
+    if runs is not None and (isinstance(runs, bool) or not isinstance(runs, int) or not 1 <= runs <= MAX_SEEDS):
+        raise ValueError(f"lockstep.runs must be null or an integer in [1, {MAX_SEEDS}], got {runs!r}")
+    if device not in DEVICES:
+        raise ValueError(f"lockstep.device must be one of {', '.join(DEVICES)}, got {device!r}")
+    algorithm = cfg["algorithm"]["name"]
+    if device != "cpu" and algorithm != "dqn":
+        raise ValueError(f"lockstep.device={device} stacks deep Q-networks (algorithm=dqn); "
+                         f"algorithm={algorithm} runs on the CPU (lockstep.device=cpu)")
+    if algorithm in SB3_ALGORITHMS and runs not in (None, 1):
+        raise ValueError(f"lockstep.runs={runs}: algorithm={algorithm} learns in Stable-Baselines3's "
+                         "own loop, one run per process (lockstep.runs=1)")
 
 
 def comparable(spec: "RunSpec") -> dict[str, Any]:

@@ -65,3 +65,15 @@ def group_runs(runs: Sequence[PlannedRun], runs_per_job: int) -> list[list[Plann
     if not isinstance(runs_per_job, int) or isinstance(runs_per_job, bool) or runs_per_job < 1:
         raise ConfigError(f"hydra.launcher.runs_per_job={runs_per_job!r}: must be an integer >= 1")
     return [list(runs[i:i + runs_per_job]) for i in range(0, len(runs), runs_per_job)]
+
+
+def lockstep_groups_of(runs: Sequence[PlannedRun]) -> list[list[PlannedRun]] | None:
+    """The runs grouped for lockstep, one group per job (lockstep.launch.lockstep_groups);
+    None when no group has more than one run (then runs_per_job packs them)."""
+    from ..lockstep.launch import lockstep_groups
+
+    configs = {run.overrides: run.config for run in runs}
+    groups = lockstep_groups([run.overrides for run in runs], lambda o: configs[tuple(o)], lambda cfg: False)
+    if all(len(group) == 1 for group in groups):
+        return None
+    return [[runs[i] for i in group] for group in groups]

@@ -1,0 +1,77 @@
+"""``hydra/launcher=parallel`` (the default): Hydra's joblib launcher, one worker process per
+core, which hands a cell's seeds to one worker as a lockstep group when ``lockstep.runs`` (or a
+GPU device) asks for groups (mediated_transfer.lockstep.launch). Without groups it is Hydra's
+joblib launcher unchanged.
+"""
+
+# No `from __future__ import annotations`: Hydra's plugin scan executes this module outside
+# sys.modules, where dataclasses cannot resolve string annotations.
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, List, Sequence
+
+from hydra.core.config_store import ConfigStore
+from hydra.core.singleton import Singleton
+from hydra.core.utils import JobReturn, configure_log, setup_globals
+from hydra_plugins.hydra_joblib_launcher.config import JobLibLauncherConf
+from hydra_plugins.hydra_joblib_launcher.joblib_launcher import JoblibLauncher
+from omegaconf import DictConfig, open_dict
+
+log = logging.getLogger("mediated_transfer")
+
+
+@dataclass
+class MediatedJoblibConf(JobLibLauncherConf):
+    _target_: str = "hydra_plugins.mediated_transfer_launcher.local_launcher.MediatedJoblibLauncher"
+
+
+ConfigStore.instance().store(group="hydra/launcher", name="mediated_joblib", node=MediatedJoblibConf(),
+                             provider="mediated_transfer")
+
+
+def _execute_group(indices: List[int], overrides: List[List[str]], hydra_context: Any, config: DictConfig,
+                   singleton_state: Dict[Any, Any]) -> List[JobReturn]:
+    """In a worker: the group's jobs, configured as Hydra's joblib launcher configures a job."""
+    from mediated_transfer.lockstep.launch import run_group
+
+    setup_globals()
+    Singleton.set_state(singleton_state)
+    jobs = []
+    for idx, job_overrides in zip(indices, overrides):
+        sweep_config = hydra_context.config_loader.load_sweep_config(config, list(job_overrides))
+        with open_dict(sweep_config):
+            sweep_config.hydra.job.id = f"{sweep_config.hydra.job.name}_{idx}"
+            sweep_config.hydra.job.num = idx
+        jobs.append((sweep_config, hydra_context))
+    return run_group(jobs)
+
+
+class MediatedJoblibLauncher(JoblibLauncher):
+    def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
+        from joblib import Parallel, delayed
+
+        from mediated_transfer.lockstep.launch import lockstep_groups
+        from mediated_transfer.slurm.jobs import is_finished
+
+        assert self.config is not None and self.hydra_context is not None
+        groups = lockstep_groups(
+            job_overrides, lambda o: self.hydra_context.config_loader.load_sweep_config(self.config, o),
+            lambda cfg: is_finished(Path(str(cfg.hydra.sweep.dir)) / str(cfg.hydra.sweep.subdir),
+                                    bool(cfg.rerun_stale)))
+        if all(len(g) == 1 for g in groups):
+            return super().launch(job_overrides, initial_job_idx)
+        setup_globals()
+        configure_log(self.config.hydra.hydra_logging, self.config.hydra.verbose)
+        Path(str(self.config.hydra.sweep.dir)).mkdir(parents=True, exist_ok=True)
+        params = dict(self.joblib)
+        params["backend"] = "loky"  # as Hydra's joblib launcher: threads are incompatible with Hydra
+        log.info("%d jobs in %d lockstep groups (largest %d) on %s workers", len(job_overrides), len(groups),
+                 max(len(g) for g in groups), params.get("n_jobs"))
+        state = Singleton.get_state()
+        done = Parallel(**params)(
+            delayed(_execute_group)([initial_job_idx + i for i in g], [list(job_overrides[i]) for i in g],
+                                    self.hydra_context, self.config, state)
+            for g in groups)
+        by_index = {i: ret for g, rets in zip(groups, done) for i, ret in zip(g, rets)}
+        return [by_index[i] for i in range(len(job_overrides))]
