@@ -1,4 +1,8 @@
-"""The README's Python examples run as written (no undefined names, no outdated API)."""
+"""The documentation's Python examples run as written (no undefined names, no outdated API).
+
+The examples live in README.md and docs/*.md (the environment's in docs/environment.md, the
+Gymnasium wrapper's in docs/transfer-and-metrics.md); every ```python block of those files runs.
+"""
 
 from __future__ import annotations
 
@@ -7,14 +11,31 @@ from pathlib import Path
 
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(), flags=re.S)
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+DOCS = sorted((ROOT / "docs").glob("*.md"))
+PAGES = [README, *DOCS]
+# The pages that hold the examples once held by the README.
+EXAMPLE_PAGES = [ROOT / "docs" / "environment.md", ROOT / "docs" / "transfer-and-metrics.md"]
 
 
-def test_readme_has_python_examples():
+def _blocks(page: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S)
+
+
+BLOCKS = [(page, code) for page in PAGES for code in _blocks(page)]
+
+
+def test_docs_have_python_examples():
     assert BLOCKS
+    for page in EXAMPLE_PAGES:
+        assert _blocks(page), f"{page.relative_to(ROOT)} lost its Python example"
 
 
-@pytest.mark.parametrize("code", BLOCKS, ids=[f"block{i}" for i in range(len(BLOCKS))])
-def test_readme_python_example_runs(code):
-    exec(compile(code, str(README), "exec"), {"__name__": "readme_example"})
+@pytest.mark.parametrize(
+    "page, code",
+    BLOCKS,
+    ids=[f"{page.relative_to(ROOT)}:block{i}" for i, (page, _) in enumerate(BLOCKS)],
+)
+def test_docs_python_example_runs(page, code):
+    exec(compile(code, str(page), "exec"), {"__name__": "readme_example"})
