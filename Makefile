@@ -32,7 +32,7 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports mlflow-ui tune tune-snapshot refine table1 sensitivity slurm-check
+.PHONY: reproduce-tables reports reproduction mlflow-ui tune tune-snapshot refine table1 sensitivity slurm-check
 
 # On SLURM (ARGS="hydra/launcher=slurm ..."), every table is queued first (wait=false), then
 # each command again waits for its queued jobs: the tables share their time in the queue.
@@ -48,12 +48,16 @@ endif
 		$(BIN)/python -m mediated_transfer experiment=$$experiment scale=$(SCALE) $(ARGS) || exit 1; \
 	done
 	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
+	$(if $(filter paper,$(SCALE)),$(BIN)/python -m mediated_transfer.reporting.reproduction)
 
 slurm-check: $(STAMP) ## Opt-in, not CI: the SLURM preset on a throwaway single-node SLURM (Debian's packages; root)
 	PYTHON=$(BIN)/python bash scripts/slurm_check.sh
 
 reports: $(STAMP) ## Build reports/ (tables, figures, MLflow summaries) from the finished runs at SCALE
 	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
+
+reproduction: $(STAMP) ## Build reports/REPRODUCTION.md: a verdict on each of the paper's six claims, from the paper-scale runs
+	$(BIN)/python -m mediated_transfer.reporting.reproduction
 
 mlflow-ui: $(STAMP) ## Browse the runs in MLflow's UI, served on 127.0.0.1 only (MLFLOW_PORT=5000)
 	@echo "Each table's training runs (MLflow 3 opens an experiment on its GenAI overview instead):"

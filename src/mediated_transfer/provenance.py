@@ -36,6 +36,14 @@ LEARNER_SOURCES = {
 nor the other way round. A file listed for several algorithms counts for each of them."""
 NOT_COMPUTING = ("env/render.py", "env/animate.py", "env/scripted.py")
 """In the computing folders but never called by a run: drawing, GIFs, scripted policies."""
+REPORTING_DEFINITIONS = {
+    "metrics.py": ("first_point_at_threshold", "learning_span"),
+    "results.py": ("RunResult.learning_span",),
+}
+"""Definitions in computing files that only reports call (a run never does; tests check it):
+left out of the digest, with the imports of them, so that adding one does not make results
+stale. Results recorded before this list existed carry the digest of whole files; either
+digest of the current code makes a result current (``staleness``)."""
 LOCKSTEP_SOURCES = ("lockstep",)
 """The lockstep loop and its learner groups: in the digest of the runs they computed only, so a
 change there does not make single runs stale (nor adding it, the results it reproduces)."""
@@ -55,10 +63,13 @@ def code_version(algorithm: str | None = None, lockstep: bool = False) -> dict[s
     return version
 
 
-def source_digest(package: Path = PACKAGE, algorithm: str | None = None, lockstep: bool = False) -> str:
+def source_digest(package: Path = PACKAGE, algorithm: str | None = None, lockstep: bool = False,
+                  whole_files: bool = False) -> str:
     """Digest of the computing sources' syntax trees, without the files only other algorithms
-    run (and the lockstep loop's, unless ``lockstep``): comments, docstrings and layout do not
-    change what a run computes, so they do not change the digest."""
+    run (and the lockstep loop's, unless ``lockstep``) and the definitions only reports call
+    (unless ``whole_files``, the digest of results recorded before REPORTING_DEFINITIONS):
+    comments, docstrings and layout do not change what a run computes, so they do not change
+    the digest."""
     others = set(NOT_COMPUTING)
     if algorithm is not None:
         others |= {file for name, files in LEARNER_SOURCES.items() if name != algorithm for file in files}
@@ -70,13 +81,16 @@ def source_digest(package: Path = PACKAGE, algorithm: str | None = None, lockste
         for file in files:
             if file.relative_to(package).as_posix() in others:
                 continue
-            digest.update(file.relative_to(package).as_posix().encode())
-            digest.update(_code_of(file.read_text()).encode())
+            name = file.relative_to(package).as_posix()
+            digest.update(name.encode())
+            digest.update(_code_of(file.read_text(), () if whole_files else REPORTING_DEFINITIONS.get(name, ())).encode())
     return digest.hexdigest()[:16]
 
 
-def _code_of(source: str) -> str:
+def _code_of(source: str, left_out: tuple[str, ...] = ()) -> str:
     tree = ast.parse(source)
+    if left_out:
+        _leave_out(tree, left_out)
     # Docstrings, of modules, classes, functions and fields, are string statements: drop them.
     for node in ast.walk(tree):
         body = getattr(node, "body", None)
@@ -86,17 +100,48 @@ def _code_of(source: str) -> str:
     return ast.dump(tree, annotate_fields=False)
 
 
+def _leave_out(tree: ast.Module, names: tuple[str, ...]) -> None:
+    """Drop the named definitions ("f" or "Class.f") and the names imported for them."""
+    top = {n for n in names if "." not in n}
+    methods: dict[str, set[str]] = {}
+    for n in names:
+        if "." in n:
+            cls, _, method = n.partition(".")
+            methods.setdefault(cls, set()).add(method)
+    imported = {n.rpartition(".")[2] for n in names}
+    kept = []
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name in top:
+            continue
+        if isinstance(node, ast.ClassDef) and node.name in methods:
+            node.body = [n for n in node.body if not (isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+                                                      and n.name in methods[node.name])]
+        if isinstance(node, ast.ImportFrom) and node.level > 0:
+            node.names = [a for a in node.names if a.name not in imported]
+            if not node.names:
+                continue
+        kept.append(node)
+    tree.body = kept
+
+
 def staleness(recorded: dict[str, Any] | None, results_format: int | None) -> str | None:
     """Why a result recorded with ``recorded`` code is stale now; None when it is current."""
     if results_format != RESULTS_FORMAT:
         return f"results format {results_format or 1}, current {RESULTS_FORMAT}"
-    current = code_version((recorded or {}).get("algorithm"), bool((recorded or {}).get("lockstep")))
-    if not recorded or recorded.get("digest") != current["digest"]:
+    algorithm, lockstep = (recorded or {}).get("algorithm"), bool((recorded or {}).get("lockstep"))
+    current = code_version(algorithm, lockstep)
+    digests = {current["digest"], _whole_files_digest(algorithm, lockstep)}
+    if not recorded or recorded.get("digest") not in digests:
         commit = (recorded or {}).get("commit") or "unknown"
         dirty = " (dirty)" if (recorded or {}).get("dirty") else ""
         return (f"computed by other code: commit {commit[:10]}{dirty}, code digest "
                 f"{(recorded or {}).get('digest')}; now {str(current['commit'])[:10]}, {current['digest']}")
     return None
+
+
+@functools.cache
+def _whole_files_digest(algorithm: str | None, lockstep: bool) -> str:
+    return source_digest(algorithm=algorithm, lockstep=lockstep, whole_files=True)
 
 
 def _git(*args: str) -> str | None:

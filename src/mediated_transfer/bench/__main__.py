@@ -22,7 +22,7 @@ PARTS = {
     "lockstep": "mediated_transfer.bench.lockstep_speed",
     "projection": "mediated_transfer.bench.projection",
 }
-DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 3_000, "projection": None}
+DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 2_000, "projection": None}
 
 
 def main(argv: list[str] | None = None) -> int:

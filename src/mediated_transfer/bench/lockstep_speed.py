@@ -10,7 +10,8 @@
    path), both timed past the warm-up through their real loops (run.execute_run,
    lockstep.run.execute_lockstep): the CPU group (each run's own fast learner) and the stacked
    networks (the GPU path: batched products and one Adam pass; on this CPU, and on a GPU when
-   torch sees one).
+   torch sees one). The three alternate in rounds (medians of per-round ratios), so load from
+   other processes hits them alike.
 3. What that makes of Table IV (220 runs of 500k steps) on this machine's cores.
 Ratios within one run; aims: a group's steps/s per network >= 3x a single run's, Table IV
 <= 3.5 h on 2 cores.
@@ -26,6 +27,7 @@ from dataclasses import replace
 import numpy as np
 import torch
 
+ROUNDS = 3
 PROBE_SEED = 10_000
 """Not a table seed (0-19) nor a tuning seed: the bench measures speed only."""
 CELL = "scaffolded_15"
@@ -56,8 +58,6 @@ def breakdown(spec, warm_up: int, steps: int) -> dict:
     """Microseconds per learning step of each part, on a learner past its warm-up."""
     from ..env.mediated_env import MediatedInteractionEnv
     from ..learners.dqn import DQNConfig, DQNLearner
-    from ..learners.dqn_kernels import _adam_step
-    from .dqn_speed import products_alone_s
 
     config = DQNConfig(**spec.algorithm_params)
     learner, env = DQNLearner(config, seed=PROBE_SEED), MediatedInteractionEnv("target", spec.world)
@@ -77,6 +77,20 @@ def breakdown(spec, warm_up: int, steps: int) -> dict:
         return (time.perf_counter() - start) / n * 1e6
 
     loop(warm_up + 500)  # past learning_starts and most of the epsilon decay
+    rounds = [_parts(loop, learner, env, config, steps) for _ in range(ROUNDS)]
+    parts = {k: statistics.median(r[k] for r in rounds) for k in rounds[0]}
+    parts["update_rest"] = parts["update"] - parts["update_products"] - parts["update_adam"]
+    parts["loop_python"] = parts["step"] - sum(parts[k] for k in ("env", "act", "buffer_store",
+                                                                 "buffer_sample", "update"))
+    return parts
+
+
+def _parts(loop, learner, env, config, steps: int) -> dict:
+    """One round of the breakdown's timings."""
+    from ..learners.dqn import DQNLearner
+    from ..learners.dqn_kernels import _adam_step
+    from .dqn_speed import products_alone_s
+
     parts = {"step": loop(steps)}
     rng = np.random.default_rng(0)
     actions = rng.integers(0, 11, steps)
@@ -108,9 +122,6 @@ def breakdown(spec, warm_up: int, steps: int) -> dict:
     parts["update_adam"] = _per_call_us(adam, steps // 2)
     torch.set_flush_denormal(False)
     del grad
-    parts["update_rest"] = parts["update"] - parts["update_products"] - parts["update_adam"]
-    parts["loop_python"] = parts["step"] - sum(parts[k] for k in ("env", "act", "buffer_store",
-                                                                 "buffer_sample", "update"))
     return parts
 
 
@@ -148,18 +159,21 @@ def _stacked(device: str):
 
 
 def run(steps: int | None = None, runs: int = 4, verbose: bool = True) -> dict:
-    steps = steps or 3_000
+    steps = steps or 2_000
     torch.set_num_threads(1)
     spec, warm_up = tuned_spec(steps)
     parts = breakdown(spec, warm_up, steps)
     specs = [replace(spec, seed=PROBE_SEED + k) for k in range(runs)]
-    rates = {"single": steps_per_network(specs, warm_up, lockstep=False),
-             "lockstep_cpu": steps_per_network(specs, warm_up, lockstep=True),
-             "stacked_cpu": steps_per_network(specs, warm_up, lockstep=True, group_of=_stacked("cpu"))}
-    if torch.cuda.is_available():
+    ways = {"single": lambda: steps_per_network(specs, warm_up, lockstep=False),
+            "lockstep_cpu": lambda: steps_per_network(specs, warm_up, lockstep=True),
+            "stacked_cpu": lambda: steps_per_network(specs, warm_up, lockstep=True, group_of=_stacked("cpu"))}
+    if torch.cuda.is_available():  # a cell's 20 seeds at once, as lockstep.runs=null does on a GPU
         gpu_specs = [replace(spec, seed=PROBE_SEED + k) for k in range(TABLE_IV_RUNS // 11)]
-        rates["stacked_cuda_20"] = steps_per_network(gpu_specs, warm_up, lockstep=True,
-                                                     group_of=_stacked("cuda"))
+        ways["stacked_cuda_20"] = lambda: steps_per_network(gpu_specs, warm_up, lockstep=True,
+                                                            group_of=_stacked("cuda"))
+    measured = [{name: way() for name, way in ways.items()} for _ in range(ROUNDS)]
+    rates = {name: statistics.median(m[name] for m in measured) for name in ways}
+    ratios = {name: statistics.median(m[name] / m["single"] for m in measured) for name in ways if name != "single"}
     from ..learners.dqn import DQNConfig, update_flops
     from .dqn_speed import matmul_gflops
 
@@ -172,7 +186,7 @@ def run(steps: int | None = None, runs: int = 4, verbose: bool = True) -> dict:
         "products_flop_fraction": flops / (parts["update_products"] * 1e-6) / 1e9 / matmul,
         "matmul_gflops": matmul,
         "steps_per_s_per_network": rates,
-        "ratios": {k: v / rates["single"] for k, v in rates.items() if k != "single"},
+        "ratios": ratios,
         # Learning only (evaluation is ~1 % of a tuned DQN run), every core one run or group.
         "table_iv_hours": {k: TABLE_IV_RUNS * 500_000 / v / cores / 3600 for k, v in rates.items()},
         "cores": cores,
@@ -188,7 +202,7 @@ def run(steps: int | None = None, runs: int = 4, verbose: bool = True) -> dict:
               f"matmul's {matmul:.0f} GFLOP/s (aim >= 80%); its products alone "
               f"{result['products_flop_fraction']:.0%}", flush=True)
         line = ", ".join(f"{k} {v:,.0f}" for k, v in rates.items())
-        print(f"  learning steps/s per network, {runs} runs: {line}", flush=True)
+        print(f"  learning steps/s per network, {runs} runs ({ROUNDS} alternating rounds): {line}", flush=True)
         ratio = ", ".join(f"{k} {v:.2f}x" for k, v in result["ratios"].items())
         print(f"  per network vs single runs: {ratio} (aim >= 3x)", flush=True)
         hours = ", ".join(f"{k} {v:.1f} h" for k, v in result["table_iv_hours"].items())
