@@ -83,3 +83,15 @@ def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_pa
     assert len(verdicts) == len(CLAIMS)
     assert set(verdicts) <= {"reproduced", "partly", "not reproduced", "undecided"}
     assert "RBF 220 of 220, FSR 220 of 220" in text  # Tables II and III are complete
+
+
+def test_the_readmes_headline_is_the_one_the_committed_runs_give():
+    from mediated_transfer.config.compose import CONF_DIR
+    from mediated_transfer.reporting.reproduction import headline, load, with_headline
+
+    root = CONF_DIR.parent
+    readme = (root / "README.md").read_text()
+    assert with_headline(readme, headline(load(root))) == readme, (
+        "README's headline is stale: run `make reproduction` after committing runs")
+    with pytest.raises(ValueError, match="no headline markers"):
+        with_headline("# no markers", "x")
