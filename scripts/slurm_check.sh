@@ -2,8 +2,9 @@
 # `make slurm-check` (opt-in, not CI): the hydra/launcher=slurm preset against a real SLURM.
 # Brings up a single-node SLURM from Debian's packages (scripts/slurm_local.sh), submits a smoke
 # Table II sweep through the preset into a temporary root, checks that every run's result and
-# MLflow run are there, that resubmitting submits nothing and that a timeout_min above the
-# partition's limit is refused in one line; stops the daemons it started, whatever happens.
+# MLflow run are there, that resubmitting submits nothing, that a timeout_min above the
+# partition's limit is refused in one line, and that a lockstep sweep sends each cell's seeds
+# as one job; stops the daemons it started, whatever happens.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 python=${PYTHON:-.venv/bin/python}
@@ -53,5 +54,21 @@ code=$?
 set -e
 cat "$work/limit.err"
 [[ $code != 0 && $(grep -c . "$work/limit.err") == 1 ]] && grep -q "timeout_min=100000 is above partition" "$work/limit.err"
+
+echo "== 5. lockstep: a cell's seeds in one job, trained together, each its own result"
+lock_args=(experiment=table4_dnn scale=smoke scale.seeds=2 cell=none_0,regular_1 lockstep.runs=2 "paths.root=$root"
+           hydra/launcher=slurm hydra.launcher.progress_every_s=5)
+"$python" -m mediated_transfer "${lock_args[@]}" 2>&1 | tee "$work/lockstep.log"
+grep -q "4 submitted in 2 jobs (2 runs per job)" "$work/lockstep.log"
+"$python" - "$root" <<'PY'
+import sys
+from pathlib import Path
+from mediated_transfer.results import RunResult
+
+sweep = Path(sys.argv[1]) / "multirun/table4_dnn/smoke"
+records = [RunResult.read(f.parent).code for f in sorted(sweep.glob("*/seed=*/result.json"))]
+print(f"lockstep results: {len(records)}/4, group sizes {[r.get('lockstep_runs') for r in records]}")
+assert len(records) == 4 and all(r.get("lockstep_runs") == 2 for r in records), records
+PY
 
 echo "slurm-check: OK"
