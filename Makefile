@@ -61,7 +61,7 @@ reproduction: $(STAMP) ## Build reports/REPRODUCTION.md: a verdict on each of th
 
 mlflow-ui: $(STAMP) ## Browse the runs in MLflow's UI, served on 127.0.0.1 only (MLFLOW_PORT=5000)
 	@echo "Each table's training runs (MLflow 3 opens an experiment on its GenAI overview instead):"
-	@$(BIN)/python -m mediated_transfer.tracking sqlite:///$(MLFLOW_DB) http://127.0.0.1:$(MLFLOW_PORT)
+	@$(BIN)/python -m mediated_transfer.sweep.tracking sqlite:///$(MLFLOW_DB) http://127.0.0.1:$(MLFLOW_PORT)
 	$(BIN)/mlflow ui --backend-store-uri sqlite:///$(MLFLOW_DB) --host 127.0.0.1 --port $(MLFLOW_PORT)
 
 # --- tuning: Table I (README: "Tuning") --------------------------------------------------------

@@ -29,7 +29,7 @@ echo "== 2. every run has its result and its MLflow run"
 "$python" - "$root" "$runs" <<'PY'
 import sys
 from pathlib import Path
-from mediated_transfer import tracking
+from mediated_transfer.sweep import tracking
 
 root, runs = Path(sys.argv[1]), int(sys.argv[2])
 results = sorted((root / "multirun/table2_rbf/smoke").glob("*/seed=*/result.json"))

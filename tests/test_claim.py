@@ -1,11 +1,11 @@
-"""One process at a time per run folder (claim.py): the second is told at once, and a claim
+"""One process at a time per run folder (sweep/claim.py): the second is told at once, and a claim
 dies with its holder."""
 
 import subprocess
 import sys
 import time
 
-from mediated_transfer.claim import CLAIM_FILE, claimed
+from mediated_transfer.sweep.claim import CLAIM_FILE, claimed
 
 
 def test_a_held_claim_is_refused_and_free_again_once_released(tmp_path):
@@ -22,7 +22,7 @@ def test_a_held_claim_is_refused_and_free_again_once_released(tmp_path):
 def test_a_claim_dies_with_its_process_even_on_sigkill(tmp_path):
     holder = subprocess.Popen([sys.executable, "-c", (
         "import sys, time\n"
-        "from mediated_transfer.claim import claimed\n"
+        "from mediated_transfer.sweep.claim import claimed\n"
         f"with claimed({str(tmp_path)!r}):\n"
         "    print('held', flush=True)\n"
         "    time.sleep(600)\n")], stdout=subprocess.PIPE, text=True)

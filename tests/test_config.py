@@ -98,7 +98,7 @@ def _observation():
 
 @pytest.mark.parametrize("option", ["tracking=sqlite", "tracking=server", "tracking=none"])
 def test_tracking_options_give_settings_or_disable_tracking(hydra_context, option, tmp_path):
-    from mediated_transfer.tracking import TrackingSettings
+    from mediated_transfer.sweep.tracking import TrackingSettings
 
     cfg = _compose(option, *_companions(option), f"paths.root={tmp_path}")
     if cfg.tracking.enabled:

@@ -52,7 +52,7 @@ def test_a_healthy_run_is_not_failed():
 @pytest.mark.slow
 def test_a_sweep_goes_on_and_its_table_counts_the_failed_runs(root, source_cache, capsys):
     from mediated_transfer.reporting.__main__ import main as reporting_main
-    from mediated_transfer import tracking
+    from mediated_transfer.sweep import tracking
 
     common = ["experiment=table2_rbf", "hydra/launcher=basic", *_common(root, source_cache),
               "scale.budget=20000", "scale.eval_points=2"]

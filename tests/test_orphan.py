@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 import multiprocessing
 
-from mediated_transfer import orphan
+from mediated_transfer.sweep import orphan
 
 
 def _reparented(monkeypatch) -> None:

@@ -15,7 +15,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 from PIL import Image
 
-from mediated_transfer import tracking
+from mediated_transfer.sweep import tracking
 from mediated_transfer.config.compose import CONF_DIR
 from mediated_transfer.metrics import summarise_runs
 from mediated_transfer.reporting.__main__ import main as reporting_main

@@ -16,7 +16,7 @@ from mediated_transfer.learners.sb3 import SB3Learner
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.run import RunSpec, RunStreams, execute_run
 from mediated_transfer.saved_learner import greedy_policy
-from mediated_transfer import tracking
+from mediated_transfer.sweep import tracking
 
 from .test_sweep import _common, _results, _run_cli, _settings, root, source_cache  # noqa: F401
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from hydra.core.global_hydra import GlobalHydra
 
-from mediated_transfer import tracking
+from mediated_transfer.sweep import tracking
 from mediated_transfer.app import cli, run_job
 from mediated_transfer.config.compose import CONF_DIR, ConfigError
 from mediated_transfer.reporting.__main__ import main as reporting_main
@@ -350,7 +350,7 @@ def test_a_sweep_refuses_a_folder_of_another_configuration_before_any_run(root, 
 
 
 def test_a_baseline_and_a_variant_sharing_a_sweep_folder_keep_their_own_plans(root, source_cache):
-    from mediated_transfer.progress import sweep_progress
+    from mediated_transfer.sweep.progress import sweep_progress
     from mediated_transfer.sweep import PLAN_PREFIX
 
     common = ["-m", "experiment=table2_rbf", "cell=none_0", "hydra/launcher=basic", "tracking=none",
@@ -367,7 +367,7 @@ def test_progress_does_not_count_a_stale_result_being_recomputed(tmp_path):
     import os
     import time
 
-    from mediated_transfer.progress import sweep_progress
+    from mediated_transfer.sweep.progress import sweep_progress
     from mediated_transfer.sweep import write_plan
 
     runs = ["none_0/seed=0", "none_0/seed=1", "none_0/seed=2"]
@@ -442,7 +442,7 @@ def test_a_run_terminated_by_a_signal_ends_killed_in_mlflow(root, source_cache):
 def test_a_run_claimed_by_another_process_is_skipped_at_once(root, source_cache, capsys):
     """The same sweep launched twice: a run the other launch is computing is neither computed
     nor logged again (nor its MLflow run touched)."""
-    from mediated_transfer.claim import claimed
+    from mediated_transfer.sweep.claim import claimed
 
     folder = root / "multirun" / "table2_rbf" / "smoke" / "none_0" / "seed=0"
     with claimed(folder) as mine:

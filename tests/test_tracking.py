@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from mediated_transfer import tracking
+from mediated_transfer.sweep import tracking
 from mediated_transfer.results import RunResult
 
 _TEMPLATE: dict[str, Path] = {}

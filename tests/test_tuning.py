@@ -15,7 +15,7 @@ import optuna
 import pandas as pd
 import pytest
 
-from mediated_transfer import tracking
+from mediated_transfer.sweep import tracking
 from mediated_transfer.results import RunResult
 from mediated_transfer.tuning import mlflow_log, study as study_module
 from mediated_transfer.tuning.__main__ import main as tune

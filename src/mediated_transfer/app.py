@@ -24,14 +24,13 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from . import progress, tracking
-from .claim import claimed
+from .sweep import preflight, progress, tracking
+from .sweep.claim import claimed
+from .sweep.identity import run_name, run_tags
+from .sweep.orphan import launcher_watch
 from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
 from .config.spec import check_same_run, run_spec
-from .identity import run_name, run_tags
-from .orphan import launcher_watch
 from .results import RunResult
-from .sweep import preflight
 
 log = logging.getLogger("mediated_transfer")
 
@@ -41,7 +40,7 @@ def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.Path
 
     ``sweep_dir``: the sweep's folder when part of a sweep (for the overall count and the time
     left), None for a single run. ``variant``: the run's overrides beyond cell and seed
-    (identity.py). Returns a short summary (Hydra's job return value).
+    (sweep/identity.py). Returns a short summary (Hydra's job return value).
     """
     return run_jobs([(cfg, folder, sweep_dir, variant)])[0]
 

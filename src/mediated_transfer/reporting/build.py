@@ -18,7 +18,7 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
-from .. import tracking
+from ..sweep import tracking
 from ..metrics import MetricsConfig
 from .collect import CellRuns, collect_sweep, runs_per_variant, variant_label
 from .collect import summaries as cell_summaries

@@ -18,7 +18,7 @@ from typing import Any
 
 from hydra.core.utils import JobReturn, JobStatus
 
-from .. import progress
+from ..sweep import progress
 from . import cluster, errors
 
 log = logging.getLogger("mediated_transfer")

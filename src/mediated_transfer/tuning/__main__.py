@@ -11,7 +11,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .. import tracking
+from ..sweep import tracking
 from ..config.compose import compose_config
 from .space import SearchSpaceError, available_learners, find_search_space
 from .study import StudyMismatchError, StudyPlan, run_study, study_folder

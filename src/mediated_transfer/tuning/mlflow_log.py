@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from .. import tracking
+from ..sweep import tracking
 
 EXPERIMENT = "hparams_search"
 """One MLflow experiment holds every study; each study is a parent run in it."""

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from ..metrics import first_point_at_threshold
-from ..orphan import launcher_watch
+from ..sweep.orphan import launcher_watch
 from ..results import RunResult
 from .space import SearchSpace
 

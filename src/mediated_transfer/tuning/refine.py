@@ -38,7 +38,7 @@ import pandas as pd
 from omegaconf import OmegaConf
 from scipy import stats
 
-from ..progress import duration
+from ..sweep.progress import duration
 from .objective import first_step_at_threshold, run_seed
 from .space import SEARCH_SPACE_DIR, SearchSpace, SearchSpaceError, find_search_space
 

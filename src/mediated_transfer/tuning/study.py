@@ -24,9 +24,9 @@ import optuna
 from optuna.storages import RDBStorage, RetryHeartbeatStaleTrialCallback, fail_stale_trials
 from optuna.trial import TrialState
 
-from ..orphan import launcher_watch
-from ..progress import duration
-from ..tracking import TrackingSettings
+from ..sweep.orphan import launcher_watch
+from ..sweep.progress import duration
+from ..sweep.tracking import TrackingSettings
 from . import mlflow_log
 from .export import STUDY_FILE, write_trials_csv
 from .objective import StoppedEarly, evaluate

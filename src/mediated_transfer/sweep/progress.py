@@ -9,11 +9,11 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .sweep import PLAN_PREFIX
+from . import PLAN_PREFIX
 
 if TYPE_CHECKING:
-    from .results import RunResult
-    from .run import RunSpec
+    from ..results import RunResult
+    from ..run import RunSpec
 
 log = logging.getLogger("mediated_transfer")
 

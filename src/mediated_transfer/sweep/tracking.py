@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .results import RunResult
+from ..results import RunResult
 
 KIND_RUN = "run"
 KIND_SUMMARY = "cell_summary"

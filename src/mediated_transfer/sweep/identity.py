@@ -14,10 +14,10 @@ from typing import TYPE_CHECKING
 
 from omegaconf import DictConfig
 
-from .config.spec import spec_digest
+from ..config.spec import spec_digest
 
 if TYPE_CHECKING:
-    from .run import RunSpec
+    from ..run import RunSpec
 
 BASELINE_TAG = "baseline"
 """The variant tag of runs with no overrides beyond cell and seed."""

@@ -1,4 +1,10 @@
-"""Before anything runs: check every run of a command and prepare what runs share.
+"""The sweep machinery: what runs around each learning run of a command (app.py, the entry point,
+calls it), none of it part of what a run computes.
+
+This module checks every run of a command before anything runs and prepares what runs share;
+beside it: ``claim`` (one process at a time per run folder), ``orphan`` (a worker whose
+launcher was killed stops), ``identity`` (a run's variant, MLflow name, tags and run key),
+``progress`` (progress lines, time left) and ``tracking`` (MLflow logging).
 
 ``preflight`` is called by the entry point before Hydra starts, in the launching process, so a
 bad config stops the command before any folder exists, and its errors are never turned into
@@ -25,14 +31,13 @@ from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from . import tracking
-from .atomic import atomic_write_text
-from .config.compose import ConfigError, compose_config, prepare_overrides
-from .config.spec import check_same_run, run_spec
-from .results import RunResult
+from ..atomic import atomic_write_text
+from ..config.compose import ConfigError, compose_config, prepare_overrides
+from ..config.spec import check_same_run, run_spec
+from ..results import RunResult
 
 if TYPE_CHECKING:
-    from .run import RunSpec
+    from ..run import RunSpec
 
 log = logging.getLogger("mediated_transfer")
 
@@ -132,6 +137,10 @@ def _is_hydra_override(override: str) -> bool:
 
 
 def _prepare_tracking(config: DictConfig) -> None:
+    # Imported here, not at the top: `python -m mediated_transfer.sweep.tracking` (make mlflow-ui)
+    # imports this package first, and must not find its module imported already.
+    from . import tracking
+
     if config.tracking.enabled:
         try:
             tracking.prepare(tracking.TrackingSettings.from_config(config.tracking), experiment=str(config.name))
@@ -140,7 +149,7 @@ def _prepare_tracking(config: DictConfig) -> None:
 
 
 def _warm_source_task_cache(specs: Sequence["RunSpec"]) -> None:
-    from .transfer.source_tasks import precompute_source_task_sets
+    from ..transfer.source_tasks import precompute_source_task_sets
 
     groups: dict[tuple, set[int]] = {}
     for s in specs:
