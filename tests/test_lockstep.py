@@ -220,15 +220,11 @@ def test_launchers_group_the_unfinished_seeds_of_each_cell():
 
 
 def test_a_lockstep_result_records_the_lockstep_code_and_goes_stale_with_it(tmp_path):
-    import shutil
+    from mediated_transfer.provenance import LOCKSTEP_SOURCES, source_digest
 
-    from mediated_transfer.provenance import COMPUTING_SOURCES, LOCKSTEP_SOURCES, PACKAGE, source_digest
+    from .test_provenance import copy_computing_sources
 
-    for entry in COMPUTING_SOURCES + LOCKSTEP_SOURCES:
-        if (PACKAGE / entry).is_dir():
-            shutil.copytree(PACKAGE / entry, tmp_path / entry, ignore=shutil.ignore_patterns("__pycache__"))
-        else:
-            shutil.copy(PACKAGE / entry, tmp_path / entry)
+    copy_computing_sources(tmp_path, LOCKSTEP_SOURCES)
     assert source_digest(tmp_path, "dqn", lockstep=True) == source_digest(algorithm="dqn", lockstep=True)
     assert source_digest(algorithm="dqn", lockstep=True) != source_digest(algorithm="dqn")
     loop = tmp_path / "lockstep" / "run.py"

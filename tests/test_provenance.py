@@ -12,8 +12,9 @@ from mediated_transfer.provenance import COMPUTING_SOURCES, PACKAGE, REPORTING_D
 from mediated_transfer.run import RunSpec, execute_run
 
 
-def _copy(root):
-    for entry in COMPUTING_SOURCES:
+def copy_computing_sources(root, extra: tuple[str, ...] = ()) -> None:
+    """The package's computing sources (and ``extra`` entries) copied under ``root``, to edit."""
+    for entry in COMPUTING_SOURCES + extra:
         if (PACKAGE / entry).is_dir():
             shutil.copytree(PACKAGE / entry, root / entry, ignore=shutil.ignore_patterns("__pycache__"))
         else:
@@ -39,7 +40,7 @@ def test_a_run_never_calls_the_definitions_left_out_of_the_digest(monkeypatch, a
 
 
 def test_a_reporting_definition_leaves_the_digest_but_other_code_does_not(tmp_path):
-    _copy(tmp_path)
+    copy_computing_sources(tmp_path)
     metrics_file = tmp_path / "metrics.py"
     source = metrics_file.read_text()
     edited = source.replace("def learning_span(", "def learning_span_renamed(")

@@ -58,23 +58,14 @@ def breakdown(spec, warm_up: int, steps: int) -> dict:
     """Microseconds per learning step of each part, on a learner past its warm-up."""
     from ..env.mediated_env import MediatedInteractionEnv
     from ..learners.dqn import DQNConfig, DQNLearner
+    from .dqn_speed import _OurLoop
 
     config = DQNConfig(**spec.algorithm_params)
     learner, env = DQNLearner(config, seed=PROBE_SEED), MediatedInteractionEnv("target", spec.world)
-    obs, _ = env.reset(seed=PROBE_SEED)
+    experiment_loop = _OurLoop(learner, env, PROBE_SEED)  # the DQN bench's loop: act, step, observe
 
     def loop(n: int) -> float:
-        nonlocal obs
-        start = time.perf_counter()
-        for _ in range(n):
-            action = learner.act(obs)
-            next_obs, reward, terminated, truncated, _ = env.step(action)
-            learner.observe(obs, action, reward, next_obs, terminated)
-            obs = next_obs
-            if terminated or truncated:
-                learner.end_episode()
-                obs, _ = env.reset()
-        return (time.perf_counter() - start) / n * 1e6
+        return experiment_loop.advance(n) / n * 1e6
 
     loop(warm_up + 500)  # past learning_starts and most of the epsilon decay
     rounds = [_parts(loop, learner, env, config, steps) for _ in range(ROUNDS)]
