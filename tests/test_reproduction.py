@@ -95,3 +95,12 @@ def test_the_readmes_headline_is_the_one_the_committed_runs_give():
         "README's headline is stale: run `make reproduction` after committing runs")
     with pytest.raises(ValueError, match="no headline markers"):
         with_headline("# no markers", "x")
+
+
+def test_an_interval_over_runs_that_never_reach_the_threshold_ends_at_never():
+    from mediated_transfer.reporting.intervals import median
+
+    times = [80_000, 100_000, 120_000, math.inf, math.inf, math.inf, math.inf]
+    point, low, high = bootstrap(median, times)
+    assert point == math.inf and high == math.inf and low < math.inf  # 4 of 7 never: the median is never
+    assert not any(math.isnan(v) for v in (point, low, high))

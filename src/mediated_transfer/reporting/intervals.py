@@ -45,9 +45,9 @@ def bootstrap(statistic: Callable[..., float], *groups: Sequence[float], resampl
         values[i] = statistic(*(a[rng.integers(0, a.size, a.size)] for a in arrays))
     values = np.where(np.isnan(values), np.inf, values)
     tail = (1 - CONFIDENCE) / 2
-    with np.errstate(invalid="ignore"):  # between two inf values numpy subtracts them, then says inf
+    with np.errstate(invalid="ignore"):  # between two inf values numpy's interpolation gives nan
         low, high = np.quantile(values, tail), np.quantile(values, 1 - tail)
-    return float(point), float(low), float(high)
+    return float(point), float(np.nan_to_num(low, nan=np.inf)), float(np.nan_to_num(high, nan=np.inf))
 
 
 def ratio_of_means(numerator: Sequence[float], denominator: Sequence[float]) -> tuple[float, float, float]:
@@ -58,10 +58,11 @@ def ratio_of_means(numerator: Sequence[float], denominator: Sequence[float]) -> 
 def ratio_of_medians(numerator: Sequence[float], denominator: Sequence[float]) -> tuple[float, float, float]:
     """median / median with its 95 % bootstrap interval; values may be +inf (a run that never
     reaches the threshold is slower than any that does)."""
-    return bootstrap(lambda a, b: _ratio(_median(a), _median(b)), numerator, denominator)
+    return bootstrap(lambda a, b: _ratio(median(a), median(b)), numerator, denominator)
 
 
-def _median(values: np.ndarray) -> float:
+def median(values: np.ndarray) -> float:
+    """The median, +inf values included (a run that never reaches the threshold is slower)."""
     with np.errstate(invalid="ignore"):  # as in bootstrap's quantiles
         return float(np.median(values))
 

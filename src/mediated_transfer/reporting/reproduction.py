@@ -25,7 +25,7 @@ import numpy as np
 
 from ..metrics import MetricsConfig, first_point_at_threshold, learning_span
 from .collect import CellRuns, collect_sweep
-from .intervals import iqm, probability_of_improvement, ratio_of_means, ratio_of_medians, seeds_to_decide
+from .intervals import bootstrap, iqm, probability_of_improvement, ratio_of_means, median, ratio_of_medians, seeds_to_decide
 from .paper import paper_rows
 
 TABLES = {"II": ("table2_rbf", "RBF"), "III": ("table3_fsr", "FSR"), "IV": ("table4_dnn", "DNN")}
@@ -278,7 +278,7 @@ CLAIMS = [
 # --- per cell and per learner ----------------------------------------------------------------------
 def cell_table(lr: Learner) -> list[str]:
     out = [f"| {lr.name} row | runs | L_R mean ± SEM | IQM | paper | ratio to none_0 [95 % CI] | "
-           "P(improvement) | never learn | time to threshold: mean curve / median per run |",
+           "P(improvement) | never learn | time to threshold: mean curve / median per run [95 % CI] |",
            "|---|---:|---:|---:|---:|---|---:|---:|---|"]
     for cell, p in lr.paper.items():
         runs = lr.runs(cell)
@@ -292,7 +292,7 @@ def cell_table(lr: Learner) -> list[str]:
         failed = f" (+{len(lr.cells[cell].failed)} diverged)" if lr.cells[cell].failed else ""
         out.append(f"| {cell} | {len(runs)}{failed} | {losses.mean():.1f} ± {sem:.1f} | {iqm(losses):.1f} | "
                    f"{p.reward_loss_mean:.1f} | {ratio} | {improve} | {lr.never_learn(cell)} | "
-                   f"{_steps(lr.mean_curve_time(cell))} / {_steps(np.median(lr.times(cell)))} |")
+                   f"{_steps(lr.mean_curve_time(cell))} / {_median_time(lr.times(cell))} |")
     return out
 
 
@@ -316,6 +316,12 @@ def split_table(L: dict[str, Learner]) -> list[str]:
                        f"({len(discovery)} of {len(runs)} discover) | median {_steps(_median(spans))} "
                        f"({len(spans)} get there) | median {_median(holding, 1)} |")
     return out
+
+
+def _median_time(times: np.ndarray) -> str:
+    """The median per-run time to threshold with its bootstrap interval (never: slower than any)."""
+    point, low, high = bootstrap(median, times)
+    return f"{_steps(point)} [{_steps(low)}, {_steps(high)}]"
 
 
 def _median(values: list, digits: int | None = None):
