@@ -185,6 +185,9 @@ def test_a_group_holds_runs_of_one_configuration_with_distinct_seeds():
         check_group([dqn_spec(0), dqn_spec(0)])
     with pytest.raises(ValueError, match="lockstep.device='tpu' is unknown; allowed: cpu, cuda"):
         make_group([dqn_spec(0)], [RunStreams.of(dqn_spec(0))], "tpu")
+    if not torch.cuda.is_available():
+        with pytest.raises(ValueError, match="lockstep.device=cuda: torch .* sees no CUDA device"):
+            make_group([dqn_spec(0)], [RunStreams.of(dqn_spec(0))], "cuda")
 
 
 def test_launchers_group_the_unfinished_seeds_of_each_cell():

@@ -94,8 +94,14 @@ def make_group(specs: Sequence[RunSpec], streams: Sequence[RunStreams], device: 
     if spec.algorithm != "dqn":
         raise ValueError(f"lockstep.device={device} stacks deep Q-networks; algorithm={spec.algorithm} "
                          "runs on the CPU (lockstep.device=cpu)")
+    import torch
+
     from ..learners.factory import validate_learner_choice
     from .stacked import StackedDQN
+
+    if device == "cuda" and not torch.cuda.is_available():  # before any work, in one line
+        raise ValueError(f"lockstep.device=cuda: torch {torch.__version__} sees no CUDA device (built with "
+                         f"CUDA {torch.version.cuda}); use lockstep.device=cpu, or a GPU node")
 
     config, _ = validate_learner_choice(spec.algorithm, spec.representation, spec.algorithm_params,
                                         spec.representation_params)

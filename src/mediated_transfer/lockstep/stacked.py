@@ -108,7 +108,8 @@ class StackedDQN:
 
     def _q(self, rows: torch.Tensor, observations: torch.Tensor) -> torch.Tensor:
         """Q(s, .) of one observation per listed run: (len(rows), 11) -> (len(rows), actions)."""
-        nets = StackedNetworks(self.online.flat[rows], self.shapes)
+        # Every run greedy (most steps past the epsilon decay): the networks as they are, uncopied.
+        nets = self.online if len(rows) == len(self.views) else StackedNetworks(self.online.flat[rows], self.shapes)
         return nets.forward(observations[:, None, :])[:, 0]
 
     # --- learning ---------------------------------------------------------------------------
