@@ -32,7 +32,7 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports reproduction mlflow-ui tune tune-snapshot refine table1 sensitivity slurm-check
+.PHONY: reproduce-tables reports reproduction dqn-ablation mlflow-ui tune tune-snapshot refine table1 sensitivity slurm-check
 
 # On SLURM (ARGS="hydra/launcher=slurm ..."), every table is queued first (wait=false), then
 # each command again waits for its queued jobs: the tables share their time in the queue.
@@ -58,6 +58,10 @@ reports: $(STAMP) ## Build reports/ (tables, figures, MLflow summaries) from the
 
 reproduction: $(STAMP) ## Build reports/REPRODUCTION.md: a verdict on each of the paper's six claims, from the paper-scale runs
 	$(BIN)/python -m mediated_transfer.reporting.reproduction
+
+dqn-ablation: $(STAMP) ## The pre-registered DQN failure ablation (80 paper-scale runs, resumable), then reports/dqn_failure_ablation.md
+	$(BIN)/python -m mediated_transfer experiment=dqn_failure_ablation $(ARGS)
+	$(BIN)/python -m mediated_transfer.reporting.ablation
 
 mlflow-ui: $(STAMP) ## Browse the runs in MLflow's UI, served on 127.0.0.1 only (MLFLOW_PORT=5000)
 	@echo "Each table's training runs (MLflow 3 opens an experiment on its GenAI overview instead):"

@@ -1,0 +1,198 @@
+"""``python -m mediated_transfer.reporting.ablation``: reports/dqn_failure_ablation.md, the
+pre-registered study of why the tuned DQN without transfer sometimes never learns
+(conf/experiment/dqn_failure_ablation.yaml: hypotheses, arms, seeds and decision rule were fixed
+there before any run). This module applies that rule to the committed runs and nothing else:
+
+- the primary outcome per arm is the number of runs that never learn (no evaluation point at
+  <R> >= 8);
+- an arm *removes the failure* when it has fewer such runs than the Table I arm by a one-sided
+  Fisher exact test at p < 0.05;
+- H1 (the replay buffer forgets the early rewards) is supported when the buffer arm removes the
+  failure and the epsilon arm does not; H2 (exploration ends too early) the other way round;
+- when the Table I arm fails so rarely that even an arm with no failure could not reach
+  p < 0.05 (at 20 runs an arm: fewer than 5 failures), the study cannot decide, and says so.
+
+Secondary measures: mean L_R and its ratio to the Table I arm with a 95 % bootstrap interval,
+and, for the runs that never learn, the first rewarded target episode and the final TD loss.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from omegaconf import OmegaConf
+from scipy import stats
+
+from ..config.compose import CONF_DIR
+from ..metrics import first_point_at_threshold
+from ..results import RunResult
+from .collect import collect_sweep, runs_per_variant
+from .intervals import iqm, ratio_of_means
+from .reproduction import THRESHOLD, _ratio, _steps
+
+EXPERIMENT = "dqn_failure_ablation"
+CELL = "none_0"
+RUNS_PER_ARM = 20  # the design's seeds 2000-2019
+ALPHA = 0.05
+FACTORS = ("buffer_size", "epsilon_decay_steps")
+
+
+def table_i_values(conf_dir: Path = CONF_DIR) -> tuple[int, int]:
+    """Table I's buffer size and epsilon decay, read from where Table I keeps them."""
+    tuned = OmegaConf.load(conf_dir / "tuned" / "dqn_network.yaml").algorithm
+    return tuple(int(tuned[f]) for f in FACTORS)
+
+
+@dataclass
+class Arm:
+    """One arm of the 2 x 2 design: its factor values and its finished runs."""
+
+    buffer_size: int
+    epsilon_decay_steps: int
+    runs: list[RunResult]
+
+    def name(self, table_i: tuple[int, int]) -> str:
+        changed = [f"{label} {value:,}" for label, value, reference in
+                   zip(("buffer", "ε decay"), (self.buffer_size, self.epsilon_decay_steps), table_i)
+                   if value != reference]
+        return "Table I" if not changed else " + ".join(changed)
+
+    @property
+    def never_learn(self) -> list[RunResult]:
+        return [r for r in self.runs if first_point_at_threshold(r.mean_reward, THRESHOLD) is None]
+
+    @property
+    def losses(self) -> np.ndarray:
+        return np.array([r.reward_loss for r in self.runs])
+
+
+def fewer_failures_p(failures: int, runs: int, reference_failures: int, reference_runs: int) -> float:
+    """One-sided Fisher exact p that an arm with ``failures`` of ``runs`` fails less often than
+    the reference arm with ``reference_failures`` of ``reference_runs``."""
+    table = [[failures, runs - failures], [reference_failures, reference_runs - reference_failures]]
+    return float(stats.fisher_exact(table, alternative="less").pvalue)
+
+
+def decidable(reference_failures: int, reference_runs: int, runs: int) -> bool:
+    """Whether any result of an arm of ``runs`` runs (even none failing) could reach p < ALPHA
+    against the reference arm."""
+    return fewer_failures_p(0, runs, reference_failures, reference_runs) < ALPHA
+
+
+def decide(buffer_arm: tuple[int, int], epsilon_arm: tuple[int, int], reference: tuple[int, int]) -> str:
+    """The pre-registered rule on (failures, runs) of the two single-factor arms and of the
+    Table I arm: which hypothesis the runs support, or why they support none."""
+    ref_fail, ref_runs = reference
+    if not decidable(ref_fail, ref_runs, min(buffer_arm[1], epsilon_arm[1])):
+        return (f"cannot decide: the Table I arm has {ref_fail} of {ref_runs} runs that never learn, "
+                f"too few for even an arm without failures to reach p < {ALPHA}")
+    removes = {h: fewer_failures_p(*arm, *reference) < ALPHA
+               for h, arm in (("H1", buffer_arm), ("H2", epsilon_arm))}
+    if removes["H1"] and removes["H2"]:
+        return "both single-factor arms remove the failure: neither hypothesis alone is supported"
+    if removes["H1"]:
+        return "H1 supported: the larger buffer removes the failure, the longer ε decay does not"
+    if removes["H2"]:
+        return "H2 supported: the longer ε decay removes the failure, the larger buffer does not"
+    return "neither supported: no single-factor arm has significantly fewer runs that never learn"
+
+
+def load(root: Path, scale: str = "paper") -> tuple[dict[tuple[int, int], Arm], list[RunResult]]:
+    """The study's runs that ran their budget by (buffer size, epsilon decay), and the runs
+    stopped as diverged (named in the report, in no arm's statistics). Every variant folder of
+    the sweep is one arm, keyed by the values its runs record."""
+    sweep = root / "multirun" / EXPERIMENT / scale
+    arms: dict[tuple[int, int], Arm] = {}
+    diverged: list[RunResult] = []
+    for variant in (runs_per_variant(sweep) if sweep.is_dir() else {}):
+        cell = collect_sweep(sweep, algorithm="dqn", variant=variant).get(CELL)
+        if cell is None:
+            continue
+        diverged += cell.failed
+        for run in cell.results:
+            key = tuple(int(run.config["algorithm"][f]) for f in FACTORS)
+            arms.setdefault(key, Arm(*key, [])).runs.append(run)
+    for arm in arms.values():
+        arm.runs.sort(key=lambda r: r.seed)
+    return arms, diverged
+
+
+def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged: list[RunResult] = ()) -> str:
+    lines = ["# Pre-registered: why the tuned DQN without transfer sometimes never learns", "",
+             "Generated by `python -m mediated_transfer.reporting.ablation` (`make dqn-ablation`) from the "
+             f"committed runs of `conf/experiment/{EXPERIMENT}.yaml`, which fixed the hypotheses, arms, "
+             "seeds and decision rule before any run; do not edit by hand.", "",
+             "Without transfer, some runs of the tuned DQN find the target task's reward and still never "
+             "learn. H1: the replay buffer forgets the few early rewarded transitions before the network "
+             "has learned from them. H2: exploration ends too early (ε reaches 0.1 within Table I's decay). "
+             "A hypothesis is supported when its arm has fewer runs that never learn than the Table I arm "
+             f"(one-sided Fisher exact test, p < {ALPHA}) and the other single-factor arm has not.", ""]
+    reference = arms.get(table_i)
+    if reference is None or not reference.runs:
+        return "\n".join(lines + ["No runs of the Table I arm yet: "
+                                  f"`python -m mediated_transfer experiment={EXPERIMENT}`.", ""])
+    total = sum(len(a.runs) for a in arms.values())
+    if total < 4 * RUNS_PER_ARM:
+        lines += [f"**Incomplete:** {total} of {4 * RUNS_PER_ARM} runs; the decision below is provisional.", ""]
+    if diverged:
+        lines += ["Stopped as diverged, in no arm: " + ", ".join(
+            f"seed {r.seed} ({r.failure})" for r in diverged) + ".", ""]
+    ref_never = len(reference.never_learn)
+    lines += ["| arm | buffer | ε decay (steps) | runs | never learn | p (fewer than Table I) | "
+              "L_R mean ± SEM | IQM | L_R ratio to Table I [95 % CI] |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+    # Table I's arm, then the buffer arm (H1), the epsilon arm (H2), and both changed.
+    order = sorted(arms.values(), key=lambda a: ((a.buffer_size != table_i[0]) + (a.epsilon_decay_steps != table_i[1]),
+                                                 a.epsilon_decay_steps != table_i[1]))
+    for arm in order:
+        losses = arm.losses
+        sem = losses.std(ddof=1) / math.sqrt(len(losses)) if len(losses) > 1 else math.nan
+        is_ref = arm is reference
+        p = "" if is_ref else f"{fewer_failures_p(len(arm.never_learn), len(arm.runs), ref_never, len(reference.runs)):.3f}"
+        ratio = "" if is_ref else _ratio(ratio_of_means(losses, reference.losses))
+        lines.append(f"| {arm.name(table_i)} | {arm.buffer_size:,} | {arm.epsilon_decay_steps:,} | {len(arm.runs)} | "
+                     f"{len(arm.never_learn)} | {p} | {losses.mean():.1f} ± {sem:.1f} | {iqm(losses):.1f} | {ratio} |")
+    single = {}
+    for arm in arms.values():
+        if (arm.buffer_size != table_i[0]) != (arm.epsilon_decay_steps != table_i[1]):  # one factor changed
+            single["buffer" if arm.buffer_size != table_i[0] else "epsilon"] = (len(arm.never_learn), len(arm.runs))
+    lines += [""]
+    if set(single) == {"buffer", "epsilon"}:
+        lines += [f"**Decision:** {decide(single['buffer'], single['epsilon'], (ref_never, len(reference.runs)))}.", ""]
+    else:
+        lines += ["**Decision:** not yet: a single-factor arm has no runs.", ""]
+    lines += ["## The runs that never learn", "",
+              "| arm | seed | L_R | first rewarded target episode | final <R> | episodes | final TD loss |",
+              "|---|---:|---:|---|---:|---:|---:|"]
+    for arm in order:
+        for r in arm.never_learn:
+            s = r.learner_stats
+            lines.append(f"| {arm.name(table_i)} | {r.seed} | {r.reward_loss:.1f} | {_steps(r.first_target_reward_step)} | "
+                         f"{r.mean_reward[-1]:.2f} | {s.get('episodes', math.nan):,.0f} | "
+                         f"{s.get('last_loss', math.nan):.1e} |")
+    return "\n".join(lines + [""])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m mediated_transfer.reporting.ablation",
+                                     description=__doc__.split("\n\n")[0])
+    parser.add_argument("--root", default=".", help="the checkout whose multirun/ holds the runs")
+    parser.add_argument("--scale", default="paper", help="the study's scale (its design is the paper's)")
+    parser.add_argument("--out", default=None, help=f"where to write (default: <root>/reports/{EXPERIMENT}.md)")
+    args = parser.parse_args(argv)
+    root = Path(args.root)
+    out = Path(args.out) if args.out else root / "reports" / f"{EXPERIMENT}.md"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    arms, diverged = load(root, args.scale)
+    out.write_text(render(arms, table_i_values(), diverged))
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
