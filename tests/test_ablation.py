@@ -68,3 +68,22 @@ def test_the_report_names_each_arm_and_applies_the_rule(tmp_path):
     assert "| ε decay 50,000 | 21,255 | 50,000 | 10 | 5 |" in text
     assert "**Decision:** H1 supported" in text
     assert text.count("| Table I | 200") == 6  # each run that never learns, with its seed
+
+
+def test_the_registered_sweep_runs_every_arm_in_its_own_folder_and_reports_it(tmp_path):
+    """The experiment as registered, at smoke scale on one seed: four arms, each in its own folder,
+    and a report with a row per arm."""
+    from .test_sweep import _run_cli
+    from .test_tracking import fresh_store
+
+    fresh_store(tmp_path)
+    _run_cli(f"experiment={EXPERIMENT}", "hydra/launcher=basic", "scale=smoke", "seed=2000",
+             f"paths.root={tmp_path}")
+    sweep = tmp_path / "multirun" / EXPERIMENT / "smoke" / "none_0" / "seed=2000"
+    assert sorted(p.parent.name for p in sweep.glob("*/result.json")) == sorted(
+        f"algorithm.buffer_size={b},algorithm.epsilon_decay_steps={e}" for b in (21255, 100000) for e in (10929, 50000))
+    out = tmp_path / "ablation.md"
+    assert main(["--root", str(tmp_path), "--scale", "smoke", "--out", str(out)]) == 0
+    text = out.read_text()
+    for arm in ("| Table I |", "| buffer 100,000 |", "| ε decay 50,000 |", "| buffer 100,000 + ε decay 50,000 |"):
+        assert arm in text

@@ -89,8 +89,8 @@ def decide(buffer_arm: tuple[int, int], epsilon_arm: tuple[int, int], reference:
     Table I arm: which hypothesis the runs support, or why they support none."""
     ref_fail, ref_runs = reference
     if not decidable(ref_fail, ref_runs, min(buffer_arm[1], epsilon_arm[1])):
-        return (f"cannot decide: the Table I arm has {ref_fail} of {ref_runs} runs that never learn, "
-                f"too few for even an arm without failures to reach p < {ALPHA}")
+        return (f"cannot decide: with {ref_fail} of {ref_runs} Table I runs that never learn, even an arm "
+                f"without failures could not reach p < {ALPHA}")
     removes = {h: fewer_failures_p(*arm, *reference) < ALPHA
                for h, arm in (("H1", buffer_arm), ("H2", epsilon_arm))}
     if removes["H1"] and removes["H2"]:
