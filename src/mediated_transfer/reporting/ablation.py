@@ -29,11 +29,10 @@ from omegaconf import OmegaConf
 from scipy import stats
 
 from ..config.compose import CONF_DIR
-from ..metrics import first_point_at_threshold
 from ..results import RunResult
 from .collect import collect_sweep, runs_per_variant
 from .intervals import iqm, ratio_of_means
-from .reproduction import THRESHOLD, _ratio, _steps
+from .reproduction import NEVER_LEARN_COLUMNS, _ratio, never_learn_row, never_learns
 
 EXPERIMENT = "dqn_failure_ablation"
 CELL = "none_0"
@@ -64,7 +63,7 @@ class Arm:
 
     @property
     def never_learn(self) -> list[RunResult]:
-        return [r for r in self.runs if first_point_at_threshold(r.mean_reward, THRESHOLD) is None]
+        return [r for r in self.runs if never_learns(r)]
 
     @property
     def losses(self) -> np.ndarray:
@@ -166,15 +165,9 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
         lines += [f"**Decision:** {decide(single['buffer'], single['epsilon'], (ref_never, len(reference.runs)))}.", ""]
     else:
         lines += ["**Decision:** not yet: a single-factor arm has no runs.", ""]
-    lines += ["## The runs that never learn", "",
-              "| arm | seed | L_R | first rewarded target episode | final <R> | episodes | final TD loss |",
-              "|---|---:|---:|---|---:|---:|---:|"]
-    for arm in order:
-        for r in arm.never_learn:
-            s = r.learner_stats
-            lines.append(f"| {arm.name(table_i)} | {r.seed} | {r.reward_loss:.1f} | {_steps(r.first_target_reward_step)} | "
-                         f"{r.mean_reward[-1]:.2f} | {s.get('episodes', math.nan):,.0f} | "
-                         f"{s.get('last_loss', math.nan):.1e} |")
+    header, rule = NEVER_LEARN_COLUMNS
+    lines += ["## The runs that never learn", "", "| arm " + header, "|---" + rule]
+    lines += [f"| {arm.name(table_i)} {never_learn_row(r)}" for arm in order for r in arm.never_learn]
     return "\n".join(lines + [""])
 
 

@@ -71,10 +71,27 @@ class Learner:
                          for r in self.runs(cell)], dtype=float)
 
     def never_learn(self, cell: str) -> int:
-        return sum(first_point_at_threshold(r.mean_reward, THRESHOLD) is None for r in self.runs(cell))
+        return sum(map(never_learns, self.runs(cell)))
 
     def mean_curve_time(self, cell: str) -> int | None:
         return self.cells[cell].summary(MetricsConfig())["time_to_threshold"]
+
+
+def never_learns(run) -> bool:
+    """No evaluation point of the run reaches <R> >= 8."""
+    return first_point_at_threshold(run.mean_reward, THRESHOLD) is None
+
+
+NEVER_LEARN_COLUMNS = ("| seed | L_R | first rewarded target episode | final <R> | episodes | final TD loss |",
+                       "|---:|---:|---|---:|---:|---:|")
+
+
+def never_learn_row(run) -> str:
+    """A run that never learns, as a row under NEVER_LEARN_COLUMNS: when it first found the
+    reward, and the learner's state at the end (episodes run, last TD loss)."""
+    s = run.learner_stats
+    return (f"| {run.seed} | {run.reward_loss:.1f} | {_steps(run.first_target_reward_step)} | "
+            f"{run.mean_reward[-1]:.2f} | {s.get('episodes', math.nan):,.0f} | {s.get('last_loss', math.nan):.1e} |")
 
 
 def load(root: Path) -> dict[str, Learner]:
@@ -334,17 +351,11 @@ def _median(values: list, digits: int | None = None):
 def dqn_failures(L: dict[str, Learner]) -> list[str]:
     dnn = L["IV"]
     runs = dnn.runs("none_0")
-    never = [r for r in runs if first_point_at_threshold(r.mean_reward, THRESHOLD) is None]
-    out = [f"Without transfer, {len(never)} of {len(runs)} DQN runs never reach <R> >= 8; with transfer, "
-           f"{sum(dnn.never_learn(c) for c in dnn.cells if c != 'none_0')} of "
-           f"{sum(len(dnn.runs(c)) for c in dnn.cells if c != 'none_0')} runs.", "",
-           "| seed | L_R | first rewarded target episode | final <R> | episodes | final TD loss |",
-           "|---:|---:|---|---:|---:|---:|"]
-    for r in never:
-        s = r.learner_stats
-        out.append(f"| {r.seed} | {r.reward_loss:.1f} | {_steps(r.first_target_reward_step)} | "
-                   f"{r.mean_reward[-1]:.2f} | {s.get('episodes', math.nan):,.0f} | {s.get('last_loss', math.nan):.1e} |")
-    return out
+    never = [r for r in runs if never_learns(r)]
+    return [f"Without transfer, {len(never)} of {len(runs)} DQN runs never reach <R> >= 8; with transfer, "
+            f"{sum(dnn.never_learn(c) for c in dnn.cells if c != 'none_0')} of "
+            f"{sum(len(dnn.runs(c)) for c in dnn.cells if c != 'none_0')} runs.", "",
+            *NEVER_LEARN_COLUMNS, *map(never_learn_row, never)]
 
 
 SHORT_CLAIMS = (
