@@ -55,10 +55,14 @@ class Arm:
     epsilon_decay_steps: int
     runs: list[RunResult]
 
+    def changed(self, table_i: tuple[int, int]) -> tuple[bool, bool]:
+        """Which factors differ from Table I's: (buffer, epsilon decay)."""
+        return self.buffer_size != table_i[0], self.epsilon_decay_steps != table_i[1]
+
     def name(self, table_i: tuple[int, int]) -> str:
-        changed = [f"{label} {value:,}" for label, value, reference in
-                   zip(("buffer", "ε decay"), (self.buffer_size, self.epsilon_decay_steps), table_i)
-                   if value != reference]
+        changed = [f"{label} {value:,}" for label, value, differs in
+                   zip(("buffer", "ε decay"), (self.buffer_size, self.epsilon_decay_steps), self.changed(table_i))
+                   if differs]
         return "Table I" if not changed else " + ".join(changed)
 
     @property
@@ -146,8 +150,7 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
               "L_R mean ± SEM | IQM | L_R ratio to Table I [95 % CI] |",
               "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     # Table I's arm, then the buffer arm (H1), the epsilon arm (H2), and both changed.
-    order = sorted(arms.values(), key=lambda a: ((a.buffer_size != table_i[0]) + (a.epsilon_decay_steps != table_i[1]),
-                                                 a.epsilon_decay_steps != table_i[1]))
+    order = sorted(arms.values(), key=lambda a: (sum(a.changed(table_i)), a.changed(table_i)[1]))
     for arm in order:
         losses = arm.losses
         sem = losses.std(ddof=1) / math.sqrt(len(losses)) if len(losses) > 1 else math.nan
@@ -156,10 +159,8 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
         ratio = "" if is_ref else _ratio(ratio_of_means(losses, reference.losses))
         lines.append(f"| {arm.name(table_i)} | {arm.buffer_size:,} | {arm.epsilon_decay_steps:,} | {len(arm.runs)} | "
                      f"{len(arm.never_learn)} | {p} | {losses.mean():.1f} ± {sem:.1f} | {iqm(losses):.1f} | {ratio} |")
-    single = {}
-    for arm in arms.values():
-        if (arm.buffer_size != table_i[0]) != (arm.epsilon_decay_steps != table_i[1]):  # one factor changed
-            single["buffer" if arm.buffer_size != table_i[0] else "epsilon"] = (len(arm.never_learn), len(arm.runs))
+    single = {("buffer" if arm.changed(table_i)[0] else "epsilon"): (len(arm.never_learn), len(arm.runs))
+              for arm in arms.values() if sum(arm.changed(table_i)) == 1}
     lines += [""]
     if set(single) == {"buffer", "epsilon"}:
         lines += [f"**Decision:** {decide(single['buffer'], single['epsilon'], (ref_never, len(reference.runs)))}.", ""]
