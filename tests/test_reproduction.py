@@ -9,13 +9,18 @@ import numpy as np
 import pytest
 
 from mediated_transfer.reporting.intervals import (bootstrap, iqm, probability_of_improvement, ratio_of_means,
-                                                   ratio_of_medians, seeds_to_decide)
+                                                   ratio_of_medians, seeds_to_decide, sem)
 from mediated_transfer.reporting.reproduction import CLAIMS, combine, main, row_verdict
 
 
 def test_iqm_is_the_mean_of_the_middle_half():
     assert iqm([1, 2, 3, 4, 5, 6, 7, 100]) == pytest.approx(4.5)  # 3, 4, 5, 6
     assert iqm([5.0] * 4) == 5.0
+
+
+def test_sem_is_the_sample_std_over_root_n_and_undefined_for_one_run():
+    assert sem([2, 4, 4, 4, 5, 5, 7, 9]) == pytest.approx(2.138 / math.sqrt(8), abs=1e-3)  # sample std 2.138
+    assert math.isnan(sem([3.0]))
 
 
 def test_probability_of_improvement_counts_lower_as_better_and_ties_as_half():

@@ -19,7 +19,6 @@ and, for the runs that never learn, the first rewarded target episode and the fi
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +30,7 @@ from scipy import stats
 from ..config.compose import CONF_DIR
 from ..results import RunResult
 from .collect import collect_sweep, runs_per_variant
-from .intervals import iqm, ratio_of_means
+from .intervals import iqm, ratio_of_means, sem
 from .reproduction import NEVER_LEARN_COLUMNS, _ratio, never_learn_row, never_learns
 
 EXPERIMENT = "dqn_failure_ablation"
@@ -153,12 +152,11 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
     order = sorted(arms.values(), key=lambda a: (sum(a.changed(table_i)), a.changed(table_i)[1]))
     for arm in order:
         losses = arm.losses
-        sem = losses.std(ddof=1) / math.sqrt(len(losses)) if len(losses) > 1 else math.nan
         is_ref = arm is reference
         p = "" if is_ref else f"{fewer_failures_p(len(arm.never_learn), len(arm.runs), ref_never, len(reference.runs)):.3f}"
         ratio = "" if is_ref else _ratio(ratio_of_means(losses, reference.losses))
         lines.append(f"| {arm.name(table_i)} | {arm.buffer_size:,} | {arm.epsilon_decay_steps:,} | {len(arm.runs)} | "
-                     f"{len(arm.never_learn)} | {p} | {losses.mean():.1f} ± {sem:.1f} | {iqm(losses):.1f} | {ratio} |")
+                     f"{len(arm.never_learn)} | {p} | {losses.mean():.1f} ± {sem(losses):.1f} | {iqm(losses):.1f} | {ratio} |")
     single = {("buffer" if arm.changed(table_i)[0] else "epsilon"): (len(arm.never_learn), len(arm.runs))
               for arm in arms.values() if sum(arm.changed(table_i)) == 1}
     lines += [""]

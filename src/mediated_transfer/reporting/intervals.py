@@ -23,6 +23,12 @@ def iqm(values: Sequence[float]) -> float:
     return float(stats.trim_mean(np.asarray(values, dtype=float), 0.25))
 
 
+def sem(values: Sequence[float]) -> float:
+    """Standard error of the mean (sample std, ddof=1, over sqrt(n)); nan for fewer than 2 runs."""
+    a = np.asarray(values, dtype=float)
+    return float(a.std(ddof=1) / math.sqrt(a.size)) if a.size > 1 else math.nan
+
+
 def probability_of_improvement(better: Sequence[float], reference: Sequence[float]) -> float:
     """P(X < Y) + P(X = Y) / 2 for a run X of ``better`` and a run Y of ``reference``, lower
     being better (the Mann-Whitney U statistic over n_x n_y)."""

@@ -25,7 +25,8 @@ import numpy as np
 
 from ..metrics import MetricsConfig, first_point_at_threshold, learning_span
 from .collect import CellRuns, collect_sweep
-from .intervals import bootstrap, iqm, probability_of_improvement, ratio_of_means, median, ratio_of_medians, seeds_to_decide
+from .intervals import (bootstrap, iqm, probability_of_improvement, ratio_of_means, median, ratio_of_medians, sem,
+                        seeds_to_decide)
 from .paper import paper_rows
 
 TABLES = {"II": ("table2_rbf", "RBF"), "III": ("table3_fsr", "FSR"), "IV": ("table4_dnn", "DNN")}
@@ -303,11 +304,10 @@ def cell_table(lr: Learner) -> list[str]:
             out.append(f"| {cell} | 0 | | | {p.reward_loss_mean:.1f} | | | | |")
             continue
         losses = lr.losses(cell)
-        sem = losses.std(ddof=1) / math.sqrt(len(losses)) if len(losses) > 1 else math.nan
         ratio = "" if cell == "none_0" else _ratio(ratio_of_means(losses, lr.losses("none_0")))
         improve = "" if cell == "none_0" else f"{probability_of_improvement(losses, lr.losses('none_0')):.2f}"
         failed = f" (+{len(lr.cells[cell].failed)} diverged)" if lr.cells[cell].failed else ""
-        out.append(f"| {cell} | {len(runs)}{failed} | {losses.mean():.1f} ± {sem:.1f} | {iqm(losses):.1f} | "
+        out.append(f"| {cell} | {len(runs)}{failed} | {losses.mean():.1f} ± {sem(losses):.1f} | {iqm(losses):.1f} | "
                    f"{p.reward_loss_mean:.1f} | {ratio} | {improve} | {lr.never_learn(cell)} | "
                    f"{_steps(lr.mean_curve_time(cell))} / {_median_time(lr.times(cell))} |")
     return out
@@ -382,9 +382,8 @@ def headline(L: dict[str, Learner]) -> str:
         ours = [lr.losses(c).mean() for c in small]
         paper = [lr.paper[c].reward_loss_mean for c in small]
         base = lr.losses("none_0")
-        sem = base.std(ddof=1) / math.sqrt(len(base)) if len(base) > 1 else math.nan
         big = [f"{lr.losses(c).mean():.1f}" if lr.runs(c) else "-" for c in ("regular_5000", "scaffolded_5000")]
-        out.append(f"| {lr.table} ({lr.name}) | {runs}/{len(lr.paper) * EXPECTED_RUNS} | {base.mean():.1f} ± {sem:.1f} / "
+        out.append(f"| {lr.table} ({lr.name}) | {runs}/{len(lr.paper) * EXPECTED_RUNS} | {base.mean():.1f} ± {sem(base):.1f} / "
                    f"{lr.paper['none_0'].reward_loss_mean:.1f} | {min(ours):.1f}-{max(ours):.1f} / "
                    f"{min(paper):.1f}-{max(paper):.1f} | {', '.join(big)} / {lr.paper['regular_5000'].reward_loss_mean:.0f}, "
                    f"{lr.paper['scaffolded_5000'].reward_loss_mean:.0f} |")

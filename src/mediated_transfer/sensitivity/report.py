@@ -21,6 +21,7 @@ from ..atomic import atomic_write_text
 from ..reporting.collect import CellRuns, collect_sweep
 from ..reporting.figures import _pyplot
 from ..reporting.formats import write_csv
+from ..reporting.intervals import sem
 from ..reporting.paper import paper_rows
 from .measures import ArmGain, Measures, arm_gain, median_or_none
 from ..env.scripted import random_success_rate
@@ -70,7 +71,7 @@ def measure(study: Study, measures: Measures, progress=print) -> list[WorldResul
             row.learning_median = median_or_none([r.learning_span(threshold) for r in runs])
             losses = np.array([r.reward_loss for r in runs])
             row.reward_loss_none = float(losses.mean())
-            row.reward_loss_none_sem = float(losses.std(ddof=1) / math.sqrt(len(losses))) if len(losses) > 1 else math.nan
+            row.reward_loss_none_sem = sem(losses)
             for cell in study.transfer_cells:
                 if cell in cells and cells[cell].results:
                     row.gains[cell] = arm_gain(cell, cells[cell].results, runs, threshold, budget, measures)
