@@ -68,6 +68,16 @@ def test_the_report_names_each_arm_and_applies_the_rule(tmp_path):
     assert "| ε decay 50,000 | 21,255 | 50,000 | 10 | 5 |" in text
     assert "**Decision:** H1 supported" in text
     assert text.count("| Table I | 200") == 6  # each run that never learns, with its seed
+    # Every run's curve, a panel per arm, beside the report and linked from it.
+    assert "![Every run's curve, a panel per arm](ablation.png)" in text
+    assert (tmp_path / "ablation.png").stat().st_size > 0
+
+
+def test_without_table_i_runs_the_report_says_how_to_start_and_draws_nothing(tmp_path):
+    out = tmp_path / "ablation.md"
+    assert main(["--root", str(tmp_path), "--out", str(out)]) == 0
+    assert "No runs of the Table I arm yet" in out.read_text()
+    assert not (tmp_path / "ablation.png").exists()
 
 
 def test_the_registered_sweep_runs_every_arm_in_its_own_folder_and_reports_it(tmp_path):

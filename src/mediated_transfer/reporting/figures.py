@@ -126,3 +126,47 @@ def plot_loss_bars(cells: list[str], bars: list[Bars], title: str, subtitle: str
     fig.savefig(path, metadata={"Software": None})
     plt.close(fig)
     return path
+
+
+@dataclass(frozen=True)
+class RunPanel:
+    label: str
+    steps: list[list[int]]
+    """Each run's evaluation steps."""
+    curves: list[list[float]]
+    """Each run's <R> at those steps."""
+
+
+def plot_run_panels(panels: list[RunPanel], threshold: float, max_reward: float, title: str,
+                    path: str | Path) -> Path:
+    """One panel per group, every run's <R> curve as its own line: where runs are bimodal (some
+    never learn), a mean with SEM bands hides what the single curves show. A run that never
+    reaches the threshold is drawn in red, a run that does in grey."""
+    from ..metrics import first_point_at_threshold
+
+    plt = _pyplot()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, axes = plt.subplots(1, len(panels), figsize=(2.9 * len(panels) + 0.6, 3.4), dpi=120,
+                             sharex=True, sharey=True, squeeze=False)
+    for ax, panel in zip(axes[0], panels):
+        failed = 0
+        for steps, curve in zip(panel.steps, panel.curves):
+            never = first_point_at_threshold(curve, threshold) is None
+            failed += never
+            ax.plot(steps, curve, color="tab:red" if never else "0.45", linewidth=0.8, alpha=0.8)
+        ax.axhline(threshold, color="black", linestyle="--", linewidth=1)
+        label = [wrapped for line in panel.label.splitlines() for wrapped in textwrap.wrap(line, 40)]
+        ax.set_title("\n".join([*label, f"{len(panel.curves)} runs, {failed} never learn"]), fontsize=8)
+        ax.grid(alpha=0.3)
+        ax.set_xlabel("learning steps", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.xaxis.set_major_formatter(plt.FuncFormatter(lambda x, _: f"{x / 1000:g}k"))
+    axes[0][0].set_ylabel("<R> of each run", fontsize=8)
+    axes[0][0].set_ylim(-0.2, max_reward + 0.2)
+    axes[0][0].set_xlim(left=0)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, metadata={"Software": None})
+    plt.close(fig)
+    return path
