@@ -68,6 +68,10 @@ def test_the_report_names_each_arm_and_applies_the_rule(tmp_path):
     assert "| ε decay 50,000 | 21,255 | 50,000 | 10 | 5 |" in text
     assert "**Decision:** H1 supported" in text
     assert text.count("| Table I | 200") == 6  # each run that never learns, with its seed
+    # By seed: L_R per arm (Table I, buffer, epsilon), the runs that never learn in bold.
+    assert "| 2000 | **39.7** | 11.7 | **39.7** | 2 of 3 |" in text
+    assert "| 2005 | **39.7** | 11.7 | 11.7 | 1 of 3 |" in text
+    assert "| 2009 | 11.7 | 11.7 | 11.7 | 0 of 3 |" in text
     # Every run's curve, a panel per arm, beside the report and linked from it.
     assert "![Every run's curve, a panel per arm](ablation.png)" in text
     assert (tmp_path / "ablation.png").stat().st_size > 0

@@ -226,6 +226,16 @@ def test_same_seed_gives_identical_weights_and_actions():
     assert actions_a != actions_c
 
 
+def test_a_larger_buffer_changes_nothing_until_the_smaller_one_is_full():
+    # The DQN failure ablation's by-seed table relies on it: its arms that differ only in the
+    # buffer are the same run up to the step at which the smaller buffer is full.
+    small, large = (DQNLearner(small_config(buffer_size=n), seed=3) for n in (300, 5_000))
+    assert run_chain(small, 300) == run_chain(large, 300)
+    assert torch.equal(small.network.flat, large.network.flat)
+    run_chain(small, 300), run_chain(large, 300)
+    assert not torch.equal(small.network.flat, large.network.flat)
+
+
 def test_greedy_act_leaves_the_learner_untouched():
     learner = DQNLearner(small_config(), seed=0)
     run_chain(learner, 150)

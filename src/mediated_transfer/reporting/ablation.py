@@ -14,6 +14,8 @@ there before any run). This module applies that rule to the committed runs and n
 
 Secondary measures: mean L_R and its ratio to the Table I arm with a 95 % bootstrap interval,
 and, for the runs that never learn, the first rewarded target episode and the final TD loss.
+Beside them, marked exploratory and outside the rule: every run's curve per arm (a figure) and
+L_R per seed and arm.
 """
 
 from __future__ import annotations
@@ -185,7 +187,30 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
     header, rule = NEVER_LEARN_COLUMNS
     lines += ["## The runs that never learn", "", "| arm " + header, "|---" + rule]
     lines += [f"| {arm.name(table_i)} {never_learn_row(r)}" for arm in order for r in arm.never_learn]
-    return "\n".join(lines + [""])
+    return "\n".join(lines + [""] + by_seed(order, table_i))
+
+
+def by_seed(order: list[Arm], table_i: tuple[int, int]) -> list[str]:
+    """L_R per seed and arm, the runs that never learn marked. Exploratory, outside the
+    registered rule: the arms share their seeds, so failures that gather on a seed across arms
+    point at what a seed fixes (the network's initialisation, the first episodes) rather than at
+    the buffer or the ε schedule."""
+    runs = {(i, r.seed): r for i, arm in enumerate(order) for r in arm.runs}
+    seeds = sorted({seed for _, seed in runs})
+    lines = ["## By seed (exploratory, not part of the registered rule)", "",
+             "The arms share their seeds, and a seed fixes the network's initialisation and the "
+             "exploration's random draws; up to the step at which the smaller buffer is full "
+             f"({table_i[0]:,}), the two arms that differ only in the buffer are the same run. "
+             "L_R per run; **bold**: never learns.", "",
+             "| seed | " + " | ".join(arm.name(table_i) for arm in order) + " | never learn |",
+             "|---:|" + "---:|" * len(order) + "---:|"]
+    for seed in seeds:
+        cells = [runs.get((i, seed)) for i in range(len(order))]
+        shown = ["" if r is None else (f"**{r.reward_loss:.1f}**" if never_learns(r) else f"{r.reward_loss:.1f}")
+                 for r in cells]
+        failed = sum(r is not None and never_learns(r) for r in cells)
+        lines.append(f"| {seed} | " + " | ".join(shown) + f" | {failed} of {sum(r is not None for r in cells)} |")
+    return lines + [""]
 
 
 def main(argv: list[str] | None = None) -> int:
