@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from mediated_transfer.reporting.intervals import (bootstrap, iqm, probability_of_improvement, ratio_of_means,
-                                                   ratio_of_medians, seeds_to_decide, sem)
+from mediated_transfer.reporting.intervals import (bootstrap, format_interval, iqm, probability_of_improvement,
+                                                   ratio_of_means, ratio_of_medians, seeds_to_decide, sem)
 from mediated_transfer.reporting.reproduction import CLAIMS, combine, main, row_verdict
 
 
@@ -47,6 +47,12 @@ def test_ratio_of_medians_takes_never_reached_as_slower_than_any():
     inf = math.inf
     assert ratio_of_medians([100, 100, 100], [200, 200, inf])[0] == 0.5
     assert ratio_of_medians([100, inf, inf], [200, 200, 200])[0] == math.inf
+
+
+def test_an_interval_prints_its_bounds_and_says_when_one_is_infinite_or_undefined():
+    assert format_interval((1.449, 1.255, 1.671)) == "1.45 [1.25, 1.67]"
+    assert format_interval((0.5, 0.4, math.inf)) == "0.50 [0.40, ∞]"
+    assert format_interval((math.nan, math.nan, math.nan)) == "n/a [n/a, n/a]"
 
 
 def test_seeds_to_decide_follows_the_two_proportion_test():

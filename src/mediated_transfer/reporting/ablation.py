@@ -33,8 +33,8 @@ from ..config.compose import CONF_DIR
 from ..results import RunResult
 from .collect import collect_sweep, runs_per_variant
 from .figures import RunPanel, plot_run_panels
-from .intervals import iqm, ratio_of_means, sem
-from .reproduction import MAX_REWARD, NEVER_LEARN_COLUMNS, THRESHOLD, _ratio, never_learn_row, never_learns
+from .intervals import format_interval, iqm, ratio_of_means, sem
+from .reproduction import MAX_REWARD, NEVER_LEARN_COLUMNS, THRESHOLD, never_learn_row, never_learns
 
 EXPERIMENT = "dqn_failure_ablation"
 CELL = "none_0"
@@ -172,7 +172,7 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
         losses = arm.losses
         is_ref = arm is reference
         p = "" if is_ref else f"{fewer_failures_p(len(arm.never_learn), len(arm.runs), ref_never, len(reference.runs)):.3f}"
-        ratio = "" if is_ref else _ratio(ratio_of_means(losses, reference.losses))
+        ratio = "" if is_ref else format_interval(ratio_of_means(losses, reference.losses))
         lines.append(f"| {arm.name(table_i)} | {arm.buffer_size:,} | {arm.epsilon_decay_steps:,} | {len(arm.runs)} | "
                      f"{len(arm.never_learn)} | {p} | {losses.mean():.1f} ± {sem(losses):.1f} | {iqm(losses):.1f} | {ratio} |")
     single = {("buffer" if arm.changed(table_i)[0] else "epsilon"): (len(arm.never_learn), len(arm.runs))

@@ -67,6 +67,13 @@ def ratio_of_medians(numerator: Sequence[float], denominator: Sequence[float]) -
     return bootstrap(lambda a, b: _ratio(median(a), median(b)), numerator, denominator)
 
 
+def format_interval(interval: tuple[float, float, float]) -> str:
+    """``point [low, high]`` to two decimals; an infinite bound prints as ∞, an undefined one as n/a."""
+    point, low, high = interval
+    fmt = lambda v: "∞" if math.isinf(v) else ("n/a" if math.isnan(v) else f"{v:.2f}")  # noqa: E731
+    return f"{fmt(point)} [{fmt(low)}, {fmt(high)}]"
+
+
 def median(values: np.ndarray) -> float:
     """The median, +inf values included (a run that never reaches the threshold is slower)."""
     with np.errstate(invalid="ignore"):  # as in bootstrap's quantiles

@@ -25,8 +25,8 @@ import numpy as np
 
 from ..metrics import MetricsConfig, first_point_at_threshold, learning_span
 from .collect import CellRuns, collect_sweep
-from .intervals import (bootstrap, iqm, probability_of_improvement, ratio_of_means, median, ratio_of_medians, sem,
-                        seeds_to_decide)
+from .intervals import (bootstrap, format_interval, iqm, median, probability_of_improvement, ratio_of_means,
+                        ratio_of_medians, sem, seeds_to_decide)
 from .paper import paper_rows
 
 TABLES = {"II": ("table2_rbf", "RBF"), "III": ("table3_fsr", "FSR"), "IV": ("table4_dnn", "DNN")}
@@ -111,12 +111,6 @@ def _steps(value: float | None) -> str:
     return f"{value / 1000:.0f}k"
 
 
-def _ratio(r: tuple[float, float, float]) -> str:
-    point, low, high = r
-    fmt = lambda v: "∞" if math.isinf(v) else ("n/a" if math.isnan(v) else f"{v:.2f}")  # noqa: E731
-    return f"{fmt(point)} [{fmt(low)}, {fmt(high)}]"
-
-
 def _paper_time(p) -> float:
     return math.inf if p.time_to_threshold is None else p.time_to_threshold
 
@@ -131,7 +125,7 @@ def claim_1(L: dict[str, Learner]) -> tuple[str, list[str]]:
         paper = _paper_time(rbf.paper[cell]) / _paper_time(base)
         lines.append(f"| {cell} / none_0 | {_steps(_paper_time(rbf.paper[cell]))} / {_steps(_paper_time(base))} = "
                      f"{paper:.2f} | {_steps(rbf.mean_curve_time(cell))} / {_steps(rbf.mean_curve_time('none_0'))} | "
-                     f"{_steps(np.median(rbf.times(cell)))} / {_steps(np.median(rbf.times('none_0')))} | {_ratio(ours)} |")
+                     f"{_steps(np.median(rbf.times(cell)))} / {_steps(np.median(rbf.times('none_0')))} | {format_interval(ours)} |")
         verdicts.append(row_verdict(ours, paper))
         lines[-1] += f" {verdicts[-1]} |"
     head = ("| ratio of time to threshold | paper | ours, mean curve | ours, median per run | ours, ratio of "
@@ -149,7 +143,7 @@ def claim_2(L: dict[str, Learner]) -> tuple[str, list[str]]:
             ours = ratio_of_means(lr.losses(cell), lr.losses("none_0"))
             p = lr.paper[cell].reward_loss_mean / lr.paper["none_0"].reward_loss_mean
             holds.append(row_verdict(ours))
-            lines.append(f"| {lr.name} | {cell} / none_0 | {p:.2f} | {_ratio(ours)} | "
+            lines.append(f"| {lr.name} | {cell} / none_0 | {p:.2f} | {format_interval(ours)} | "
                          f"{probability_of_improvement(lr.losses(cell), lr.losses('none_0')):.2f} | {holds[-1]} |")
     head = ("| learner | ratio of mean L_R | paper | ours [95 % CI] | P(a run of the row beats one "
             "without transfer) | row |\n|---|---|---|---|---|---|")
@@ -172,7 +166,7 @@ def claim_3(L: dict[str, Learner]) -> tuple[str, list[str]]:
             if paper_unlearned:
                 unlearned.append(never > n / 2)
             lines.append(f"| {lr.name} | {cell} / {best} | {p:.2f} ({lr.paper[cell].reward_loss_mean:.0f}) | "
-                         f"{_ratio(ours)} ({lr.losses(cell).mean():.1f}) | {never} of {n} |"
+                         f"{format_interval(ours)} ({lr.losses(cell).mean():.1f}) | {never} of {n} |"
                          f" {'yes' if paper_unlearned else 'no'} | {worse[-1]} |")
     # "Not learned at all" is a second part: where the paper says so, most of our runs must not learn.
     verdict = combine(worse + ["reproduced" if u else "absent" for u in unlearned])
@@ -192,7 +186,7 @@ def claim_4(L: dict[str, Learner]) -> tuple[str, list[str]]:
             verdicts.append(row_verdict(ours))
             lines.append(f"| {lr.name} | N={n} | {_steps(_paper_time(lr.paper[sca]))} / "
                          f"{_steps(_paper_time(lr.paper[reg]))} = {p:.2f} | {_steps(np.median(lr.times(sca)))} / "
-                         f"{_steps(np.median(lr.times(reg)))} | {_ratio(ours)} | {verdicts[-1]} |")
+                         f"{_steps(np.median(lr.times(reg)))} | {format_interval(ours)} | {verdicts[-1]} |")
     head = ("| learner | N_source | paper: scaffolded / regular | ours, median per run | ours, ratio of "
             "medians [95 % CI] | row |\n|---|---|---|---|---|---|")
     return combine(verdicts), [head, *lines]
@@ -233,7 +227,7 @@ def claim_6(L: dict[str, Learner]) -> tuple[str, list[str]]:
             fails[strategy][0] += dnn.never_learn(cell) + len(dnn.cells[cell].failed)
             fails[strategy][1] += len(dnn.runs(cell)) + len(dnn.cells[cell].failed)
         lines.append(f"| N={n} | {_steps(_paper_time(dnn.paper[sca]))} / {_steps(_paper_time(dnn.paper[reg]))} | "
-                     f"{_steps(dnn.mean_curve_time(sca))} / {_steps(dnn.mean_curve_time(reg))} | {_ratio(ours)} | "
+                     f"{_steps(dnn.mean_curve_time(sca))} / {_steps(dnn.mean_curve_time(reg))} | {format_interval(ours)} | "
                      f"{dnn.never_learn(sca)} / {dnn.never_learn(reg)} | {slower[-1]} |")
     if not slower:
         return "undecided", ["Table IV has no transfer runs yet."]
@@ -304,7 +298,7 @@ def cell_table(lr: Learner) -> list[str]:
             out.append(f"| {cell} | 0 | | | {p.reward_loss_mean:.1f} | | | | |")
             continue
         losses = lr.losses(cell)
-        ratio = "" if cell == "none_0" else _ratio(ratio_of_means(losses, lr.losses("none_0")))
+        ratio = "" if cell == "none_0" else format_interval(ratio_of_means(losses, lr.losses("none_0")))
         improve = "" if cell == "none_0" else f"{probability_of_improvement(losses, lr.losses('none_0')):.2f}"
         failed = f" (+{len(lr.cells[cell].failed)} diverged)" if lr.cells[cell].failed else ""
         out.append(f"| {cell} | {len(runs)}{failed} | {losses.mean():.1f} ± {sem(losses):.1f} | {iqm(losses):.1f} | "
