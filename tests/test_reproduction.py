@@ -94,6 +94,9 @@ def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_pa
     assert len(verdicts) == len(CLAIMS)
     assert set(verdicts) <= {"reproduced", "partly", "not reproduced", "undecided"}
     assert "RBF 220 of 220, FSR 220 of 220" in text  # Tables II and III are complete
+    # the DQN's failures point at the study of their cause, and the link resolves beside the report
+    assert "(dqn_failure_ablation.md)" in text
+    assert (CONF_DIR.parent / "reports" / "dqn_failure_ablation.md").is_file()
 
 
 def test_the_readmes_headline_is_the_one_the_committed_runs_give():

@@ -349,7 +349,9 @@ def dqn_failures(L: dict[str, Learner]) -> list[str]:
     return [f"Without transfer, {len(never)} of {len(runs)} DQN runs never reach <R> >= 8; with transfer, "
             f"{sum(dnn.never_learn(c) for c in dnn.cells if c != 'none_0')} of "
             f"{sum(len(dnn.runs(c)) for c in dnn.cells if c != 'none_0')} runs.", "",
-            *NEVER_LEARN_COLUMNS, *map(never_learn_row, never)]
+            *NEVER_LEARN_COLUMNS, *map(never_learn_row, never), "",
+            "Why: a pre-registered ablation of the replay buffer and the ε schedule on fresh seeds, "
+            "[dqn_failure_ablation.md](dqn_failure_ablation.md) (`make dqn-ablation`)."]
 
 
 SHORT_CLAIMS = (
