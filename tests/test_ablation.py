@@ -3,10 +3,11 @@ on known counts, and its report from a tree of runs."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from mediated_transfer.reporting.ablation import (EXPERIMENT, decidable, decide, fewer_failures_p, main,
-                                                  table_i_values)
+                                                  seed_clustering_p, table_i_values)
 from mediated_transfer.results import RunResult
 
 STEPS = [100, 200, 300, 400]
@@ -72,9 +73,22 @@ def test_the_report_names_each_arm_and_applies_the_rule(tmp_path):
     assert "| 2000 | **39.7** | 11.7 | **39.7** | 2 of 3 |" in text
     assert "| 2005 | **39.7** | 11.7 | 11.7 | 1 of 3 |" in text
     assert "| 2009 | 11.7 | 11.7 | 11.7 | 0 of 3 |" in text
+    assert "Over the 10 seeds that every arm has run" in text
     # Every run's curve, a panel per arm, beside the report and linked from it.
     assert "![Every run's curve, a panel per arm](ablation.png)" in text
     assert (tmp_path / "ablation.png").stat().st_size > 0
+
+
+def test_failures_on_the_same_seeds_are_unlikely_by_chance_and_spread_ones_are_not():
+    same = np.zeros((4, 10), dtype=bool)
+    same[:, :2] = True                        # every arm fails on seeds 0 and 1
+    spread = np.eye(4, 10, dtype=bool)        # each arm fails on a seed of its own
+    assert seed_clustering_p(same) < 0.01
+    assert seed_clustering_p(spread) == 1.0   # no shuffle spreads them more evenly
+    assert seed_clustering_p(same) == seed_clustering_p(same)  # seeded
+    mixed = same.copy()
+    mixed[0] = np.roll(mixed[0], 5)           # one arm's failures elsewhere: weaker evidence
+    assert seed_clustering_p(same) < seed_clustering_p(mixed) < 1.0
 
 
 def test_without_table_i_runs_the_report_says_how_to_start_and_draws_nothing(tmp_path):
