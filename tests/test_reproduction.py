@@ -50,7 +50,7 @@ def test_ratio_of_medians_takes_never_reached_as_slower_than_any():
 
 
 def test_an_interval_prints_its_bounds_and_says_when_one_is_infinite_or_undefined():
-    assert format_interval((1.449, 1.255, 1.671)) == "1.45 [1.25, 1.67]"
+    assert format_interval((1.449, 1.262, 1.671)) == "1.45 [1.26, 1.67]"
     assert format_interval((0.5, 0.4, math.inf)) == "0.50 [0.40, ∞]"
     assert format_interval((math.nan, math.nan, math.nan)) == "n/a [n/a, n/a]"
 

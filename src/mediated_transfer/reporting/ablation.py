@@ -41,6 +41,7 @@ CELL = "none_0"
 RUNS_PER_ARM = 20  # the design's seeds 2000-2019
 ALPHA = 0.05
 FACTORS = ("buffer_size", "epsilon_decay_steps")
+PERMUTATIONS = 10_000  # of the exploratory seed-clustering test
 
 
 def table_i_values(conf_dir: Path = CONF_DIR) -> tuple[int, int]:
@@ -190,7 +191,7 @@ def render(arms: dict[tuple[int, int], Arm], table_i: tuple[int, int], diverged:
     return "\n".join(lines + [""] + by_seed(order, table_i))
 
 
-def seed_clustering_p(failed: np.ndarray, permutations: int = 10_000, seed: int = 0) -> float:
+def seed_clustering_p(failed: np.ndarray, permutations: int = PERMUTATIONS, seed: int = 0) -> float:
     """How often failures gather on seeds by chance: ``failed`` is arms x seeds (True: never
     learns). The statistic is the variance over seeds of the number of arms that fail there; the
     null shuffles each arm's failures across the seeds on its own (each arm keeps its count).
@@ -228,7 +229,7 @@ def by_seed(order: list[Arm], table_i: tuple[int, int]) -> list[str]:
         failed = np.array([[never_learns(runs[i, seed]) for seed in complete] for i in range(len(order))])
         lines += ["", f"Do failures gather on seeds more than chance gives? Over the {len(complete)} seeds "
                   "that every arm has run, shuffling each arm's runs that never learn across those seeds "
-                  "(10,000 permutations, each arm keeping its count) spreads the failures per seed at "
+                  f"({PERMUTATIONS:,} permutations, each arm keeping its count) spreads the failures per seed at "
                   f"least as unevenly as observed in p = {seed_clustering_p(failed):.3f} of them."]
     return lines + [""]
 
