@@ -226,11 +226,11 @@ def by_seed(order: list[Arm], table_i: tuple[int, int]) -> list[str]:
         lines.append(f"| {seed} | " + " | ".join(shown) + f" | {failed} of {sum(r is not None for r in cells)} |")
     complete = [seed for seed in seeds if all((i, seed) in runs for i in range(len(order)))]
     if len(order) > 1 and complete:
-        failed = np.array([[never_learns(runs[i, seed]) for seed in complete] for i in range(len(order))])
+        never = np.array([[never_learns(runs[i, seed]) for seed in complete] for i in range(len(order))])
         lines += ["", f"Do failures gather on seeds more than chance gives? Over the {len(complete)} seeds "
                   "that every arm has run, shuffling each arm's runs that never learn across those seeds "
                   f"({PERMUTATIONS:,} permutations, each arm keeping its count) spreads the failures per seed at "
-                  f"least as unevenly as observed in p = {seed_clustering_p(failed):.3f} of them."]
+                  f"least as unevenly as observed in p = {seed_clustering_p(never):.3f} of them."]
     return lines + [""]
 
 
