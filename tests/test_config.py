@@ -188,7 +188,7 @@ def test_no_yaml_file_repeats_a_python_default():
 def test_network_representation_holds_no_keys_of_its_own(hydra_context):
     # The DQN's architecture lives in algorithm (DQNConfig); the factory refuses keys here.
     cfg = _compose("algorithm=dqn", "representation=network")
-    assert OmegaConf.to_container(cfg.representation) == {"name": "network"}
+    assert OmegaConf.to_container(cfg.representation) == {"name": "network", "_target_": None}
 
 
 def test_scales_match_the_paper_and_divide_the_budget(hydra_context):

@@ -222,21 +222,6 @@ def test_launchers_group_the_unfinished_seeds_of_each_cell():
     assert sorted(len(g) for g in gpu) == [1, 1, 4, 4]
 
 
-def test_a_lockstep_result_records_the_lockstep_code_and_goes_stale_with_it(tmp_path):
-    from mediated_transfer.provenance import LOCKSTEP_SOURCES, source_digest
-
-    from .test_provenance import copy_computing_sources
-
-    copy_computing_sources(tmp_path, LOCKSTEP_SOURCES)
-    assert source_digest(tmp_path, "dqn", lockstep=True) == source_digest(algorithm="dqn", lockstep=True)
-    assert source_digest(algorithm="dqn", lockstep=True) != source_digest(algorithm="dqn")
-    loop = tmp_path / "lockstep" / "run.py"
-    loop.write_text(loop.read_text() + "\nCHANGED = 1\n")
-    # A change to the lockstep loop makes its results stale, not those of single runs.
-    assert source_digest(tmp_path, "dqn", lockstep=True) != source_digest(algorithm="dqn", lockstep=True)
-    assert source_digest(tmp_path, "dqn") == source_digest(algorithm="dqn")
-
-
 def _sweep(root, *args: str):
     import subprocess
     import sys

@@ -1,61 +1,169 @@
-"""Which code computed a result: definitions only reports call stay out of the digest (and a
-run indeed never calls them); results recorded with the digest of whole files stay current."""
+"""Which code computed a result: a run's digest covers exactly the code it executes (the closure
+of its loop, learner, representation, strategy and world), so adding options or plugins and
+moving files leave results current, and a change makes exactly the runs that execute it stale."""
 
 from __future__ import annotations
 
+import importlib
+import json
 import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import pytest
 
-from mediated_transfer import metrics, results
-from mediated_transfer.provenance import COMPUTING_SOURCES, PACKAGE, REPORTING_DEFINITIONS, source_digest, staleness
-from mediated_transfer.run import RunSpec, execute_run
+from mediated_transfer.provenance import RESULTS_FORMAT, run_digest, run_kind, staleness, translate
+from mediated_transfer.provenance.certify import builtin_kinds, digests_now
+from mediated_transfer.provenance.closure import closure_digest
+from mediated_transfer.run import RunSpec
+
+REPO = Path(__file__).resolve().parents[1]
+KINDS = ["linear_q/rbf/regular", "linear_q/rbf/scaffolded", "linear_q/fsr/none", "dqn/network/regular",
+         "dqn/network/regular/lockstep", "sb3_ppo/rbf/regular", "sb3_dqn/network/none"]
 
 
-def copy_computing_sources(root, extra: tuple[str, ...] = ()) -> None:
-    """The package's computing sources (and ``extra`` entries) copied under ``root``, to edit."""
-    for entry in COMPUTING_SOURCES + extra:
-        if (PACKAGE / entry).is_dir():
-            shutil.copytree(PACKAGE / entry, root / entry, ignore=shutil.ignore_patterns("__pycache__"))
-        else:
-            shutil.copy(PACKAGE / entry, root / entry)
+def _module(tmp_path, name: str, source: str):
+    folder = tmp_path / name
+    folder.mkdir()
+    (folder / "__init__.py").write_text("")
+    (folder / "curricula.py").write_text(textwrap.dedent(source))
+    sys.path.insert(0, str(tmp_path))
+    try:
+        return importlib.import_module(f"{name}.curricula")
+    finally:
+        sys.path.remove(str(tmp_path))
 
 
-@pytest.mark.parametrize("algorithm,representation", [("linear_q", "rbf"), ("dqn", "network")])
-def test_a_run_never_calls_the_definitions_left_out_of_the_digest(monkeypatch, algorithm, representation):
-    def called(*args, **kwargs):
-        raise AssertionError("a run called a definition that REPORTING_DEFINITIONS leaves out of the digest")
+PLUGIN = textwrap.dedent("""
+    import numpy as np
 
-    modules = {"metrics.py": metrics, "results.py": results}
-    for file, names in REPORTING_DEFINITIONS.items():
-        for name in names:
-            owner, _, attr = name.rpartition(".")
-            target = getattr(modules[file], owner) if owner else modules[file]
-            monkeypatch.setattr(target, attr, called)
-    monkeypatch.setattr(results, "learning_span", called)  # the name results.py imports
-    params = {"hidden_size": 16, "learning_starts": 32, "buffer_size": 100} if algorithm == "dqn" else {}
-    spec = RunSpec(algorithm=algorithm, representation=representation, strategy="regular", n_source=1,
-                   budget=200, eval_points=2, eval_episodes=2, source_pool_size=20, algorithm_params=params)
-    assert execute_run(spec).failure is None
+    STEP = 0.5
 
+    def _helper(x):
+        return x * STEP
 
-def test_a_reporting_definition_leaves_the_digest_but_other_code_does_not(tmp_path):
-    copy_computing_sources(tmp_path)
-    metrics_file = tmp_path / "metrics.py"
-    source = metrics_file.read_text()
-    edited = source.replace("def learning_span(", "def learning_span_renamed(")
-    metrics_file.write_text(edited)  # no longer a listed definition: now it counts
-    assert source_digest(tmp_path, "linear_q") != source_digest(algorithm="linear_q")
-    metrics_file.write_text(source.replace("return max(0, int(steps[reached]) - int(first_target_reward_step))",
-                                           "return 0"))  # inside a listed definition: left out
-    assert source_digest(tmp_path, "linear_q") == source_digest(algorithm="linear_q")
-    assert source_digest(tmp_path, "linear_q", whole_files=True) != source_digest(algorithm="linear_q", whole_files=True)
+    class Base:
+        def report(self, outcome):
+            self.last = outcome
+
+    class Outward(Base):
+        '''A docstring.'''
+        def next_task(self):
+            return _helper(self.distance)  # a comment
+
+        def unused(self):
+            return 1
+""")
 
 
-def test_results_recorded_with_either_digest_of_this_code_are_current():
-    from mediated_transfer.provenance import RESULTS_FORMAT
+def _drive(strategy):
+    """What a run loop names of a strategy: a class's methods count when code calls them."""
+    strategy.next_task()
+    strategy.report(None)
 
-    for whole in (False, True):
-        record = {"digest": source_digest(algorithm="dqn", whole_files=whole), "algorithm": "dqn"}
-        assert staleness(record, RESULTS_FORMAT) is None
-    assert "computed by other code" in staleness({"digest": "0" * 16, "algorithm": "dqn"}, RESULTS_FORMAT)
+
+def _digest(module) -> str:
+    return closure_digest([_drive, module.Outward])
+
+
+def test_a_digest_follows_names_not_files_and_ignores_unused_code(tmp_path):
+    base = _digest(_module(tmp_path, "plug_a", PLUGIN))
+    # The same code in another package (a moved or renamed file), with comments and docstrings
+    # changed and unused code added: the same digest.
+    moved = PLUGIN.replace("# a comment", "# another").replace("A docstring.", "Other words.") + \
+        "\nclass Unused:\n    pass\n\nOTHER = 3\n"
+    moved = moved.replace("    def unused(self):\n        return 1\n", "    def unused(self):\n        return 2\n")
+    assert _digest(_module(tmp_path, "plug_b", moved)) == base
+    # A constant, a helper, a base class's method the run calls: each changes it.
+    for old, new in (("STEP = 0.5", "STEP = 0.25"), ("return x * STEP", "return x / STEP"),
+                     ("self.last = outcome", "self.last = None")):
+        name = f"plug_{abs(hash(new)) % 10**8}"
+        assert _digest(_module(tmp_path, name, PLUGIN.replace(old, new))) != base, new
+
+
+def _digests_of_edited_copy(root, edits: dict[str, tuple[str | None, str]], moves: dict[str, str] | None = None,
+                            kinds=KINDS) -> dict[str, str]:
+    """The run kinds' digests computed by a copy of src/ and conf/ with its files moved
+    (``moves``: old path -> new path) and edited (path -> (old, new) text; (None, text): a new file)."""
+    shutil.copytree(REPO / "src", root / "src", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(REPO / "conf", root / "conf")
+    for old, new in (moves or {}).items():
+        shutil.move(root / old, root / new)
+    for path, (old, new) in edits.items():
+        file = root / path
+        if old is None:
+            file.write_text(new)
+            continue
+        text = file.read_text()
+        assert old in text, (path, old)
+        file.write_text(text.replace(old, new))
+    script = ("import json, sys; from mediated_transfer.provenance.certify import digests_now; "
+              "print(json.dumps(digests_now(json.loads(sys.argv[1]))))")
+    out = subprocess.run([sys.executable, "-c", script, json.dumps(kinds)], capture_output=True, text=True,
+                         env={"PYTHONPATH": str(root / "src"), "PATH": "/usr/bin:/bin"}, cwd=root)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout)
+
+
+@pytest.fixture(scope="module")
+def current():
+    return digests_now(KINDS)
+
+
+def test_adding_an_unused_strategy_or_moving_a_file_leaves_every_run_current(tmp_path, current):
+    strategies = "src/mediated_transfer/transfer/strategies.py"
+    added = "\n\nclass EasyFirst(RegularTransfer):\n    def _choose(self):\n        return self._unsolved[0]\n"
+    edits = {strategies: ("        return self._unsolved[int(self.rng.integers(len(self._unsolved)))]\n\n\nclass Scaff",
+                          "        return self._unsolved[int(self.rng.integers(len(self._unsolved)))]\n" + added +
+                          "\n\nclass Scaff"),
+             "conf/strategy/easy_first.yaml": (None, "_target_: mediated_transfer.transfer.strategies.EasyFirst\n"
+                                                     "name: easy_first\n")}
+    assert _digests_of_edited_copy(tmp_path / "added", edits) == current
+    # The paper's strategies moved to another module (imports and _target_ paths follow).
+    edits = {"src/mediated_transfer/transfer/__init__.py": ("from .strategies import", "from .paper import")}
+    for name in ("none", "regular", "scaffolded"):
+        edits[f"conf/strategy/{name}.yaml"] = ("transfer.strategies.", "transfer.paper.")
+    moves = {"src/mediated_transfer/transfer/strategies.py": "src/mediated_transfer/transfer/paper.py"}
+    assert _digests_of_edited_copy(tmp_path / "moved", edits, moves) == current
+
+
+def test_a_change_to_algorithm_2_makes_the_scaffolded_runs_stale_and_no_other(tmp_path, current):
+    edits = {"src/mediated_transfer/transfer/strategies.py": ("self._similarity[k] = -np.inf",
+                                                             "self._similarity[k] = -1e300")}
+    changed = {k for k, v in _digests_of_edited_copy(tmp_path, edits).items() if v != current[k]}
+    assert changed == {"linear_q/rbf/scaffolded"}
+
+
+def test_a_change_to_one_learner_makes_only_its_runs_stale(tmp_path, current):
+    edits = {"src/mediated_transfer/learners/dqn_kernels.py": ("self.adam_steps += 1", "self.adam_steps += 2")}
+    changed = {k for k, v in _digests_of_edited_copy(tmp_path / "dqn", edits).items() if v != current[k]}
+    assert changed == {"dqn/network/regular", "dqn/network/regular/lockstep"}
+    # The lockstep loop's code counts for lockstep runs only.
+    edits = {"src/mediated_transfer/lockstep/run.py": ("run.step += 1", "run.step += 1 + 0")}
+    changed = {k for k, v in _digests_of_edited_copy(tmp_path / "lock", edits).items() if v != current[k]}
+    assert changed == {"dqn/network/regular/lockstep"}
+
+
+def test_results_are_current_through_the_translation_steps_and_stale_otherwise():
+    spec = RunSpec(strategy="regular", n_source=1)
+    now = run_digest(spec)
+    assert staleness({"digest": now}, RESULTS_FORMAT, spec) is None
+    assert "computed by other code" in staleness({"digest": "0" * 16}, RESULTS_FORMAT, spec)
+    assert "results format 1" in staleness({"digest": now}, None, spec)
+    # Every built-in kind's digest of the whole-file scheme maps to one of today's, or none.
+    assert translate("not-a-digest", run_kind(spec)) == "not-a-digest"
+
+
+def test_a_plugin_that_cannot_be_imported_makes_its_results_stale_with_the_path():
+    spec = RunSpec(strategy="easy_first", strategy_target="nowhere_pkg.EasyFirst", n_source=1)
+    why = staleness({"digest": "0" * 16}, RESULTS_FORMAT, spec)
+    assert "nowhere_pkg.EasyFirst" in why and "not importable" in why
+
+
+def test_every_builtin_kind_has_a_digest():
+    kinds = builtin_kinds()
+    assert {"linear_q/rbf/scaffolded", "dqn/network/none/lockstep", "sb3_ppo/fsr/regular"} <= set(kinds)
+    digests = digests_now(kinds)
+    assert len(set(digests.values())) == len(kinds)  # every kind runs other code

@@ -125,7 +125,7 @@ def test_evaluation_leaves_the_learner_unchanged():
     ({"strategy": "none", "n_source": 15}, "'none' needs n_source=0"),
     ({"strategy": "regular", "n_source": 0}, "need n_source >= 1"),
     ({"algorithm": "dqn", "representation": "rbf"}, "allowed: network"),
-    ({"algorithm": "sarsa"}, "allowed: linear_q, dqn"),
+    ({"algorithm": "sarsa"}, "algorithm=sarsa is unknown; allowed: dqn, linear_q, sb3_dqn, sb3_ppo"),
     ({"algorithm_params": {"gamma": 1.5}}, "gamma"),
     ({"algorithm_params": {"lamda": 0.5}}, "unknown key(s) lamda"),
 ])

@@ -152,5 +152,5 @@ def _configs(s: RunSpec):
     from mediated_transfer.learners.factory import make_features, validate_learner_choice
 
     algo, rep = validate_learner_choice(s.algorithm, s.representation, s.algorithm_params, s.representation_params)
-    return algo, make_features(s.representation, rep)
+    return algo, make_features(s.representation, s.representation_params)
 

@@ -3,15 +3,10 @@
 import numpy as np
 import pytest
 
+from mediated_transfer.config.targets import group_options
 from mediated_transfer.env import Task
-from mediated_transfer.transfer.strategies import (
-    STRATEGIES,
-    NoTransfer,
-    RegularTransfer,
-    ScaffoldedTransfer,
-    TransferStrategy,
-    make_strategy,
-)
+from mediated_transfer.transfer import EpisodeOutcome, Strategy, StrategyContext, make_strategy
+from mediated_transfer.transfer.strategies import NoTransfer, RegularTransfer, ScaffoldedTransfer
 
 
 def tasks(n):
@@ -27,44 +22,53 @@ def rng(seed=0):
     return np.random.default_rng(seed)
 
 
+def context(task_set, generator, sensors=None):
+    return StrategyContext.of_tasks(task_set, generator, sensors=sensors)
+
+
+def outcome(solved, task=Task((1.0, 0.0), (0.0, 0.0), 0.0)):
+    """The outcome of a source episode (its task is not looked at, only that it is one)."""
+    return EpisodeOutcome(task, bool(solved), 10.0 if solved else 0.0, 1, 1)
+
+
 # --- Algorithm 1 ---------------------------------------------------------------------------
 
 
 def test_regular_removes_a_task_when_solved_and_switches_to_the_target_task_when_c_is_empty():
-    strategy = RegularTransfer(tasks(3), rng())
+    strategy = RegularTransfer(context(tasks(3), rng()))
     unsolved = {0, 1, 2}
     script = [False, False, True, False, True, False, False, True]
     for solved in script:
-        assert strategy.in_source_phase
+        assert not strategy.done
         task = strategy.next_task()
         assert index_of(task) in unsolved, "a solved task must never be chosen again"
-        strategy.report(solved)
+        strategy.report(outcome(solved))
         if solved:
             unsolved.remove(index_of(task))
         assert strategy.solved_count == 3 - len(unsolved)
         assert strategy.remaining == len(unsolved)
     # The third solve empties C: every further episode is a target-task episode.
-    assert not strategy.in_source_phase
+    assert strategy.done
     assert strategy.next_task() is None
     assert strategy.next_task() is None
 
 
 def test_regular_samples_uniformly_from_c_and_keeps_failed_tasks():
-    strategy = RegularTransfer(tasks(4), rng())
+    strategy = RegularTransfer(context(tasks(4), rng()))
     counts = np.zeros(4)
     for _ in range(4000):
         counts[index_of(strategy.next_task())] += 1
-        strategy.report(False)
+        strategy.report(outcome(False))
     assert strategy.remaining == 4
     assert np.all(np.abs(counts / 4000 - 0.25) < 0.03)
 
 
 def test_regular_is_deterministic_for_a_seed():
     def sequence(seed):
-        strategy, out = RegularTransfer(tasks(10), rng(seed)), []
+        strategy, out = RegularTransfer(context(tasks(10), rng(seed))), []
         while (task := strategy.next_task()) is not None:
             out.append(index_of(task))
-            strategy.report(len(out) % 3 == 0)
+            strategy.report(outcome(len(out) % 3 == 0))
         return out
 
     assert sequence(5) == sequence(5)
@@ -87,7 +91,7 @@ SENSORS = np.array(
 
 
 def test_most_similar_unsolved_uses_cosine_similarity_not_euclidean_distance():
-    strategy = ScaffoldedTransfer(tasks(5), SENSORS, rng())
+    strategy = ScaffoldedTransfer(context(tasks(5), rng(), SENSORS))
     assert strategy.most_similar_unsolved(0) == 1
     assert strategy.most_similar_unsolved(3) == 4
     assert strategy.most_similar_unsolved(4) == 3
@@ -98,15 +102,15 @@ def test_scaffolded_never_returns_a_solved_task():
     neighbour = {0: 1, 1: 0, 2: 1}
     firsts = set()
     for seed in range(30):  # enough seeds to start from each of the three tasks
-        strategy = ScaffoldedTransfer(tasks(3), SENSORS[:3], rng(seed))
+        strategy = ScaffoldedTransfer(context(tasks(3), rng(seed), SENSORS[:3]))
         first = index_of(strategy.next_task())
         firsts.add(first)
-        strategy.report(True)
+        strategy.report(outcome(True))
         second = index_of(strategy.next_task())
         assert second == neighbour[first]
-        strategy.report(True)
+        strategy.report(outcome(True))
         assert index_of(strategy.next_task()) == ({0, 1, 2} - {first, second}).pop()
-        strategy.report(True)
+        strategy.report(outcome(True))
         assert strategy.next_task() is None
     assert firsts == {0, 1, 2}
 
@@ -119,23 +123,23 @@ def brute_force_most_similar(k, unsolved):
 
 
 def test_scaffolded_samples_at_random_until_the_first_solve():
-    strategy = ScaffoldedTransfer(tasks(5), SENSORS, rng())
+    strategy = ScaffoldedTransfer(context(tasks(5), rng(), SENSORS))
     seen = set()
     for _ in range(200):
         seen.add(index_of(strategy.next_task()))
-        strategy.report(False)
+        strategy.report(outcome(False))
     assert seen == {0, 1, 2, 3, 4}
 
 
 def test_scaffolded_then_picks_the_unsolved_task_most_similar_to_a_solved_one():
-    strategy = ScaffoldedTransfer(tasks(5), SENSORS, rng(3))
+    strategy = ScaffoldedTransfer(context(tasks(5), rng(3), SENSORS))
     first = index_of(strategy.next_task())
-    strategy.report(True)
+    strategy.report(outcome(True))
     # With one solved task k the choice is no longer random: always the same neighbour of k.
     expected = brute_force_most_similar(first, set(range(5)) - {first})
     for _ in range(20):
         assert index_of(strategy.next_task()) == expected
-        strategy.report(False)
+        strategy.report(outcome(False))
     # Scripted rest: solve every second episode; each choice is the neighbour of SOME solved task.
     solved, unsolved = [first], set(range(5)) - {first}
     for episode in range(40):
@@ -144,12 +148,12 @@ def test_scaffolded_then_picks_the_unsolved_task_most_similar_to_a_solved_one():
             break
         candidates = {brute_force_most_similar(k, unsolved) for k in solved}
         assert index_of(task) in candidates
-        strategy.report(episode % 2 == 0)
+        strategy.report(outcome(episode % 2 == 0))
         if episode % 2 == 0:
             solved.append(index_of(task))
             unsolved.remove(index_of(task))
     assert not unsolved and strategy.solved_count == 5
-    assert not strategy.in_source_phase and strategy.next_task() is None
+    assert strategy.done and strategy.next_task() is None
 
 
 # --- protocol and factory -----------------------------------------------------------------
@@ -157,8 +161,9 @@ def test_scaffolded_then_picks_the_unsolved_task_most_similar_to_a_solved_one():
 
 def test_report_must_follow_next_task_exactly_once():
     strategy = make_strategy("regular", tasks(2), rng=rng())
-    with pytest.raises(RuntimeError, match="without a pending source task"):
-        strategy.report(True)
+    with pytest.raises(RuntimeError, match="did not hand out"):
+        strategy.report(outcome(True))
+    strategy.report(outcome(True, task=None))  # a target-task episode changes nothing
     strategy.next_task()
     with pytest.raises(RuntimeError, match="twice"):
         strategy.next_task()
@@ -167,35 +172,30 @@ def test_report_must_follow_next_task_exactly_once():
 def test_no_transfer_never_has_a_source_phase():
     strategy = make_strategy("none", [])
     assert isinstance(strategy, NoTransfer)
-    assert not strategy.in_source_phase and strategy.solved_count == 0
+    assert strategy.done and strategy.solved_count == 0
     assert strategy.next_task() is None
+    strategy.report(outcome(False, task=None))
     with pytest.raises(RuntimeError):
-        strategy.report(True)
+        strategy.report(outcome(True))
 
 
-def test_factory_builds_every_strategy_behind_one_interface():
-    built = {
-        "none": make_strategy("none", []),
-        "regular": make_strategy("regular", tasks(3), rng=rng()),
-        "scaffolded": make_strategy("scaffolded", tasks(5), SENSORS, rng()),
-    }
-    assert set(built) == set(STRATEGIES)
-    for name, strategy in built.items():
-        assert strategy.name == name
-        assert isinstance(strategy, TransferStrategy)
+def test_every_option_of_the_strategy_group_builds_behind_one_interface():
+    # The options come from the config group (conf/strategy/): a new option is tested too.
+    for name in group_options("strategy"):
+        strategy = make_strategy(name, tasks(5) if name != "none" else [], rng=rng())
+        assert isinstance(strategy, Strategy), name
+        assert not strategy.done or name == "none"
 
 
 def test_factory_rejects_unknown_names_and_mismatched_task_sets():
-    with pytest.raises(ValueError, match="unknown strategy 'curriculum'; allowed: none, regular, scaffolded"):
+    with pytest.raises(ValueError, match="strategy=curriculum is unknown; allowed: none, regular, scaffolded"):
         make_strategy("curriculum", [])
     with pytest.raises(ValueError, match="'none' has no source phase but got 3 source tasks"):
         make_strategy("none", tasks(3))
     for name in ("regular", "scaffolded"):
         with pytest.raises(ValueError, match="n_source must be >= 1"):
             make_strategy(name, [], SENSORS[:0], rng())
-    with pytest.raises(ValueError, match="pass sensors"):
-        make_strategy("scaffolded", tasks(5), None, rng())
     with pytest.raises(ValueError, match="one row per source task"):
         make_strategy("scaffolded", tasks(4), SENSORS, rng())
-    with pytest.raises(ValueError, match="pass rng"):
-        make_strategy("regular", tasks(3))
+    with pytest.raises(TypeError, match="unexpected keyword argument 'k'"):
+        make_strategy("regular", tasks(3), k=3)

@@ -35,6 +35,7 @@ def synthetic_result(strategy="regular", n_source=15, seed=0, curve=(2.0, 6.0, 9
                      algorithm="linear_q", representation="rbf") -> RunResult:
     from mediated_transfer.metrics import reward_loss, time_to_threshold
     from mediated_transfer.provenance import RESULTS_FORMAT, code_version
+    from mediated_transfer.run import RunSpec
 
     return RunResult(
         algorithm=algorithm, representation=representation, strategy=strategy, n_source=n_source,
@@ -42,7 +43,9 @@ def synthetic_result(strategy="regular", n_source=15, seed=0, curve=(2.0, 6.0, 9
         success_rate=[c / 10 for c in curve], reward_loss=reward_loss(curve),
         time_to_threshold=time_to_threshold(steps, curve), source_phase_end=None,
         source_tasks_solved=0, wall_time_s=1.5, learning_steps_per_s=200.0,
-        learner_stats={"episodes": 7.0}, code=code_version(), results_format=RESULTS_FORMAT,
+        learner_stats={"episodes": 7.0}, results_format=RESULTS_FORMAT,
+        code=code_version(RunSpec(algorithm=algorithm, representation=representation, strategy=strategy,
+                                  n_source=n_source)),
     )
 
 

@@ -10,7 +10,7 @@ import pytest
 from mediated_transfer.env import ENV_ID, sample_tasks
 from mediated_transfer.env.mediated_env import PICK_O, MediatedInteractionEnv
 from mediated_transfer.env.scripted import ScriptedDirectPolicy
-from mediated_transfer.transfer import TransferWrapper, make_strategy, sensor_vectors
+from mediated_transfer.transfer import EpisodeOutcome, TransferWrapper, make_strategy, sensor_vectors
 
 SOURCE_TASKS = sample_tasks("source", 4, np.random.default_rng(5))
 # Per episode: solve it (a source task; a target task cannot be solved without the tool),
@@ -51,17 +51,16 @@ def episodes_through_the_wrapper(strategy_, seed=11):
 
 def episodes_as_the_run_loop_drives_the_strategy(strategy_, seed=11):
     # The run loop's protocol written out with the strategy object itself: next_task before an
-    # episode (None: the env samples a target task), report(solved) after a source episode,
+    # episode (None: the env samples a target task), report(outcome) after every episode,
     # an unfinished episode reported as not solved.
     env = MediatedInteractionEnv("target")
     log, env_seed = [], seed
     for outcome in SCRIPT:
-        task = strategy_.next_task()
+        task = None if strategy_.done else strategy_.next_task()
         env.reset(seed=env_seed, options=None if task is None else {"task": task})
         env_seed = None
         solved, _ = _play(env, outcome, task is not None)
-        if task is not None:
-            strategy_.report(solved)
+        strategy_.report(EpisodeOutcome(task, solved, 0.0, 1, 1))
         log.append((env.task, task is not None, solved))
     return log
 
@@ -96,7 +95,7 @@ def test_info_tells_the_episodes_phase_and_the_solved_count():
         assert info["source_phase"] and info["solved_count"] == solved  # counted at the end
         _, info = env.reset()
     assert not info["source_phase"] and info["solved_count"] == len(SOURCE_TASKS)
-    assert not env.source_phase and not env.strategy.in_source_phase
+    assert not env.source_phase and env.strategy.done
 
 
 def test_a_reset_before_the_episode_ends_counts_its_source_task_as_not_solved():
@@ -142,7 +141,7 @@ def test_it_works_inside_a_synchronous_vector_env():
     one = strategy("regular")
     [started] = _tasks_in_sync_vector_env([one])
     # The direct policy solves every source task: C empties, then target tasks follow.
-    assert not one.in_source_phase and one.solved_count == len(SOURCE_TASKS)
+    assert one.done and one.solved_count == len(SOURCE_TASKS)
     assert started[: len(SOURCE_TASKS)] == [t for t in started if t in SOURCE_TASKS]
     assert sorted(map(SOURCE_TASKS.index, started[: len(SOURCE_TASKS)])) == list(range(len(SOURCE_TASKS)))
     assert len(started) > len(SOURCE_TASKS)

@@ -174,13 +174,14 @@ class _Computing:
         from .saved_learner import forget_learner, save_learner
 
         self.folder, self.resolved, self.lockstep, self.done = folder, resolved, lockstep, False
+        self.spec = spec
         # The folder's learner must be this run's: an older one goes before the run starts.
         forget_learner(folder)
         save = (lambda learner: save_learner(learner, spec, folder)) if cfg.save_learner else None
         watch = None if sweep_dir is not None else progress.SingleRunProgress(spec)
         self.live = None
         if cfg.tracking.enabled:
-            digest = code_version(spec.algorithm, lockstep=lockstep is not None)["digest"]
+            digest = code_version(spec, lockstep=lockstep is not None)["digest"]
             tags = run_tags(cfg, folder, spec, variant, digest)
             try:
                 self.live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
@@ -209,7 +210,7 @@ class _Computing:
         if self.lockstep is not None:  # the lockstep loop's code, and how the group ran
             from .provenance import code_version
 
-            result.code = {**code_version(result.algorithm, lockstep=True), **self.lockstep}
+            result.code = {**code_version(self.spec, lockstep=True), **self.lockstep}
         result.write(self.folder)
         self.done = True
         if self.live is not None:

@@ -93,9 +93,16 @@ class RunResult:
 
     def stale(self) -> str | None:
         """Why this result no longer matches the code (provenance.staleness); None if current."""
+        from .config.spec import spec_values
         from .provenance import staleness
+        from .run import spec_from_dict
 
-        return staleness(self.code, self.results_format)
+        if self.config:
+            spec = spec_from_dict(spec_values(self.config))
+        else:  # its code is still known by its options' names (the built-ins')
+            spec = spec_from_dict({"algorithm": self.algorithm, "representation": self.representation,
+                                   "strategy": self.strategy, "n_source": self.n_source})
+        return staleness(self.code, self.results_format, spec)
 
     @staticmethod
     def exists(folder: str | os.PathLike) -> bool:

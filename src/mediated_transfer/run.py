@@ -20,17 +20,18 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import metrics
+from . import metrics, plugins
 from .config.mapping import config_from_mapping
 from .env import WorldConfig, sample_tasks
 from .env.mediated_env import MediatedInteractionEnv
 from .env.task import check_room
 from .learners.base import Learner
+from .learners.factory import check_learner, learner_target, make_learner
 from .provenance import RESULTS_FORMAT, code_version
-from .learners.factory import SB3_ALGORITHMS, check_memory, make_learner, validate_learner_choice
 from .results import RunResult
-from .transfer.source_tasks import sensor_vectors, source_task_set
-from .transfer.strategies import STRATEGIES, TransferStrategy, make_strategy, report_episode, start_episode
+from .transfer.source_tasks import source_task_set
+from .transfer.strategy import (METHODS, SOURCE_TASKS, EpisodeOutcome, Strategy, StrategyContext, solved_count,
+                                start_episode, wants_td_error)
 
 # Independent random streams of one run, all derived from its seed (never the seed itself:
 # default_rng(seed) is also the source pool's stream when seed == source_set_seed).
@@ -54,11 +55,11 @@ class RunSpec:
     """Everything that defines one learning run, as plain values."""
 
     algorithm: str = "linear_q"
-    """Learner: one of learners.factory.ALGORITHMS."""
+    """Learner: an option of the ``algorithm`` group (linear_q, dqn, sb3_ppo, sb3_dqn, a plugin's)."""
     representation: str = "rbf"
     """Its representation: rbf or fsr for linear_q, network for dqn."""
     strategy: str = "none"
-    """Transfer strategy: none, regular (Algorithm 1) or scaffolded (Algorithm 2)."""
+    """Transfer strategy: none, regular (Algorithm 1), scaffolded (Algorithm 2), a plugin's."""
     n_source: int = 0
     """N_source: size of the clustered source task set C (0: no source phase)."""
     seed: int = 0
@@ -79,14 +80,19 @@ class RunSpec:
     world: WorldConfig = field(default_factory=WorldConfig)
     algorithm_params: dict[str, Any] = field(default_factory=dict)
     representation_params: dict[str, Any] = field(default_factory=dict)
+    strategy_params: dict[str, Any] = field(default_factory=dict)
+    """The strategy's own keys (conf/strategy/<name>.yaml beside _target_ and name)."""
+    algorithm_target: str | None = None
+    """Dotted path of what builds the learner (the option's ``_target_``); None: the built-in
+    option of that name (results recorded before options carried their target)."""
+    representation_target: str | None = None
+    strategy_target: str | None = None
 
     def validate(self) -> "RunSpec":
         """Raise a clear error for bad input before any work starts."""
-        algo_config, rep_config = validate_learner_choice(
-            self.algorithm, self.representation, self.algorithm_params, self.representation_params
-        )
-        if self.strategy not in STRATEGIES:
-            raise ValueError(f"strategy={self.strategy!r} is unknown; allowed: {', '.join(STRATEGIES)}")
+        check_learner(self.algorithm, self.representation, self.algorithm_params, self.representation_params,
+                      self.algorithm_target, self.representation_target)
+        self._check_strategy()
         # Values from Python or a recorded result.json are not typed by Hydra: check them here.
         for key in ("seed", "n_source", "budget", "eval_points", "eval_episodes",
                     "source_pool_size", "source_set_seed"):
@@ -109,10 +115,15 @@ class RunSpec:
                 f"n_source={self.n_source} exceeds source_pool_size={self.source_pool_size}: "
                 "cannot cluster a pool into more clusters than it has tasks"
             )
-        if (self.strategy == "none") != (self.n_source == 0):
+        needs = getattr(plugins.owner_class(self.strategy_class()), "source_tasks", "optional")
+        if needs not in SOURCE_TASKS:
+            raise ValueError(f"strategy={self.strategy}: its source_tasks attribute is {needs!r}; "
+                             f"allowed: {', '.join(SOURCE_TASKS)}")
+        if (needs == "none" and self.n_source) or (needs == "required" and not self.n_source):
             raise ValueError(
                 f"strategy={self.strategy!r} with n_source={self.n_source}: 'none' needs "
-                "n_source=0, and 'regular'/'scaffolded' need n_source >= 1"
+                "n_source=0, and 'regular'/'scaffolded' (any strategy that learns source tasks of C) "
+                "need n_source >= 1"
             )
         for key in ("budget", "eval_points", "eval_episodes"):
             if getattr(self, key) < 1:
@@ -126,8 +137,24 @@ class RunSpec:
         # Sizes that leave no room for a task would make task sampling loop (almost) forever.
         for scenario in ("target", "source") if self.n_source else ("target",):
             check_room(scenario, self.world)
-        check_memory(self.algorithm, algo_config, rep_config)
         return self
+
+    def strategy_class(self):
+        """What builds the strategy: its ``_target_`` (or the built-in's of its name)."""
+        from .config.targets import builtin_target
+
+        path = self.strategy_target
+        if path is None:
+            try:
+                path = builtin_target("strategy", self.strategy)
+            except KeyError as error:
+                raise ValueError(error.args[0]) from None
+        return plugins.locate("strategy", path)
+
+    def _check_strategy(self) -> None:
+        target = self.strategy_class()
+        plugins.check_interface("strategy", target, METHODS, "strategy")
+        plugins.check_parameters("strategy", target, self.strategy_params, ("context",))
 
     def _check_threshold(self) -> None:
         # <R> is a mean of episode rewards in {0, success_reward}: a threshold outside
@@ -194,7 +221,7 @@ class RunStreams:
     learner_seed: int
     env_seed: int
     """Seed of the training environment's first reset (its target tasks and action noise)."""
-    strategy: TransferStrategy
+    strategy: Strategy
     eval_tasks: list
     """The evaluation's target tasks: the same for every strategy and N_source of a seed."""
     eval_seed: int
@@ -203,10 +230,12 @@ class RunStreams:
     @classmethod
     def of(cls, spec: RunSpec) -> "RunStreams":
         world = spec.world
-        source_tasks = source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
-                                       seed=spec.source_set_seed, cache_dir=spec.cache_dir)
-        strategy = make_strategy(spec.strategy, source_tasks, sensor_vectors(source_tasks, world),
-                                 np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)))
+        context = StrategyContext(
+            rng=np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)), world=world,
+            n_source=spec.n_source,
+            build_source_tasks=lambda: source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
+                                                       seed=spec.source_set_seed, cache_dir=spec.cache_dir))
+        strategy = plugins.call(spec.strategy_class(), spec.strategy_params, context=context)
         eval_tasks = sample_tasks("target", spec.eval_episodes,
                                   np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)), world)
         return cls(_stream_seed(spec.seed, _LEARNER_STREAM), _stream_seed(spec.seed, _ENV_STREAM),
@@ -260,15 +289,17 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     """Run one learning run and return its result (the caller writes it). The callbacks see
     the run as it goes; they cannot change what it computes."""
     spec.validate()
-    if spec.algorithm in SB3_ALGORITHMS:  # SB3 learns in its own loop (run_sb3.py)
-        from .run_sb3 import execute_sb3_run
-
-        return execute_sb3_run(spec, progress, progress_every, on_evaluation, on_finish)
+    own_loop = own_run_loop(spec)
+    if own_loop is not None:  # e.g. SB3 learns in its own loop (run_sb3.py)
+        return own_loop(spec, progress, progress_every, on_evaluation, on_finish)
     world = spec.world
     streams = RunStreams.of(spec)
     learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                           spec.representation_params, world=world, seed=streams.learner_seed)
+                           spec.representation_params, world=world, seed=streams.learner_seed,
+                           algorithm_target=spec.algorithm_target,
+                           representation_target_path=spec.representation_target)
     strategy = streams.strategy
+    td_signal = wants_td_error(strategy)
     env = MediatedInteractionEnv("target", world)
     curve = Curve(spec, streams, on_evaluation)
     progress_every = progress_every or curve.every
@@ -281,12 +312,17 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
         obs, _, task = start_episode(env, strategy, env_seed)
         env_seed = None
         terminated = False
+        episode_return, length, td_total = 0.0, 0, 0.0
         while True:
             action = learner.act(obs, explore=True)
             next_obs, reward, terminated, truncated, _ = env.step(action)
+            if td_signal:  # before observe: the error the update learns from
+                td_total += abs(learner.td_error(obs, action, reward, next_obs, terminated))
             learner.observe(obs, action, reward, next_obs, terminated)
             obs = next_obs
             step += 1
+            episode_return += reward
+            length += 1
             if reward > 0 and task is None and first_target_reward is None:
                 first_target_reward = step
             if step % curve.every == 0:
@@ -296,17 +332,24 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
             if terminated or truncated or step >= spec.budget or curve.failure is not None:
                 break
         learner.end_episode()
-        if task is not None:
-            report_episode(strategy, task, solved=bool(terminated))
-            if not strategy.in_source_phase:
-                source_phase_end = step
+        was_done = strategy.done
+        strategy.report(EpisodeOutcome(task, bool(terminated), episode_return, length, step,
+                                       td_total / length if td_signal else None))
+        if not was_done and strategy.done:
+            source_phase_end = step
     wall = curve.stop()
     if on_finish is not None:
         on_finish(learner)
     return run_result(spec, curve, strategy, learner.stats, source_phase_end, first_target_reward, wall)
 
 
-def run_result(spec: RunSpec, curve: Curve, strategy: TransferStrategy, learner_stats: dict,
+def own_run_loop(spec: RunSpec):
+    """The run loop a learner brings (its class's ``run_loop``, a dotted path), or None: run.py's."""
+    path = getattr(plugins.owner_class(learner_target(spec.algorithm, spec.algorithm_target)), "run_loop", None)
+    return None if path is None else plugins.locate("algorithm.run_loop", path)
+
+
+def run_result(spec: RunSpec, curve: Curve, strategy: Strategy, learner_stats: dict,
                source_phase_end: int | None, first_target_reward: int | None, wall: float) -> RunResult:
     """The RunResult of a finished (or failed) run."""
     rewards_arr = np.asarray(curve.rewards)
@@ -326,11 +369,11 @@ def run_result(spec: RunSpec, curve: Curve, strategy: TransferStrategy, learner_
         time_to_threshold=None if failure else metrics.time_to_threshold(curve.steps, rewards_arr, spec.threshold),
         source_phase_end=source_phase_end,
         first_target_reward_step=first_target_reward,
-        source_tasks_solved=strategy.solved_count,
+        source_tasks_solved=solved_count(strategy),
         wall_time_s=wall,
         learning_steps_per_s=spec.budget / curve.learn_time if curve.learn_time > 0 else math.inf,
         learner_stats=dict(learner_stats),
-        code=code_version(spec.algorithm),
+        code=code_version(spec),
         results_format=RESULTS_FORMAT,
         failure=failure,
     )

@@ -16,7 +16,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from .env.mediated_env import MediatedInteractionEnv
-from .learners.factory import make_features, validate_learner_choice
+from .learners.factory import make_features
 from .learners.sb3 import SB3Learner
 from .results import RunResult
 from .run import Curve, EvaluationFn, FinishFn, ProgressFn, RunSpec, RunStreams, run_result
@@ -27,13 +27,11 @@ def execute_sb3_run(spec: RunSpec, progress: ProgressFn | None = None, progress_
                     on_evaluation: EvaluationFn | None = None,
                     on_finish: FinishFn | None = None) -> RunResult:
     """run.execute_run for an SB3 learner (it calls this one; ``spec`` is validated)."""
-    algo_config, rep_config = validate_learner_choice(
-        spec.algorithm, spec.representation, spec.algorithm_params, spec.representation_params)
     streams = RunStreams.of(spec)
     strategy = streams.strategy
     env = DummyVecEnv([lambda: TransferWrapper(MediatedInteractionEnv("target", spec.world), strategy)])
-    learner = SB3Learner(spec.algorithm, algo_config, make_features(spec.representation, rep_config),
-                         spec.world, streams.learner_seed, env=env)
+    features = make_features(spec.representation, spec.representation_params, spec.representation_target)
+    learner = SB3Learner.of(spec.algorithm, spec.algorithm_params, features, spec.world, streams.learner_seed, env=env)
     # SB3 seeded the env's first reset with the learner's seed: use the run's env stream, as
     # run.py's loop does (the same target tasks and action noise for every learner of a seed).
     env.seed(streams.env_seed)
@@ -62,7 +60,7 @@ class _RunCallback(BaseCallback):
         super().__init__(verbose=0)
         self.spec, self.curve, self.learner, self.strategy = spec, curve, learner, strategy
         self.progress, self.progress_every = progress, progress_every
-        self.in_source_phase = strategy.in_source_phase
+        self.in_source_phase = not strategy.done
         self.source_phase_end: int | None = None
         self.first_target_reward: int | None = None
 
@@ -71,7 +69,7 @@ class _RunCallback(BaseCallback):
         info, reward = self.locals["infos"][0], self.locals["rewards"][0]
         if reward > 0 and not info["source_phase"] and self.first_target_reward is None:
             self.first_target_reward = step
-        if self.in_source_phase and not self.strategy.in_source_phase:
+        if self.in_source_phase and self.strategy.done:
             self.in_source_phase, self.source_phase_end = False, step
         if self.locals["dones"][0]:
             self.learner.episodes += 1

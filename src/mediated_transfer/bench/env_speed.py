@@ -67,7 +67,7 @@ def learner_episodes(learn_steps: int = LEARN_STEPS, seed: int = 0) -> list[Epis
     from ..config.spec import run_spec
     from ..learners.factory import make_learner
     from ..transfer.source_tasks import sensor_vectors, source_task_set
-    from ..transfer.strategies import make_strategy
+    from ..transfer.strategy import EpisodeOutcome, make_strategy
 
     spec = run_spec(compose_config([*LEARNER_OVERRIDES, f"seed={seed}"]))
     world = spec.world
@@ -82,7 +82,7 @@ def learner_episodes(learn_steps: int = LEARN_STEPS, seed: int = 0) -> list[Epis
     episodes: list[Episode] = []
     steps = 0
     while steps < learn_steps:
-        task = strategy.next_task()
+        task = None if strategy.done else strategy.next_task()
         source = task is not None
         if not source:
             task = sample_task("target", target_tasks, world)
@@ -97,8 +97,7 @@ def learner_episodes(learn_steps: int = LEARN_STEPS, seed: int = 0) -> list[Epis
             actions.append(action)
             obs = next_obs
         learner.end_episode()
-        if source:
-            strategy.report(solved=bool(terminated))
+        strategy.report(EpisodeOutcome(task if source else None, bool(terminated), 0.0, len(actions), steps))
         steps += len(actions)
         episodes.append(Episode(noise_seed, task, tuple(actions), obs))
     return episodes

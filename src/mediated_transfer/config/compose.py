@@ -24,7 +24,7 @@ from hydra import compose, initialize_config_dir
 from hydra.core.global_hydra import GlobalHydra
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.errors import HydraException, MissingConfigException
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from . import schema
@@ -109,11 +109,43 @@ def compose_config(overrides: Sequence[str], hydra: bool = False) -> DictConfig:
     overrides = prepare_overrides(overrides)
     try:
         with hydra_context():
-            cfg = compose(CONFIG_NAME, overrides=list(overrides), return_hydra_config=hydra)
+            cfg = compose(CONFIG_NAME, overrides=list(overrides), return_hydra_config=True)
     except (HydraException, OmegaConfBaseException) as error:
         raise ConfigError(one_line(error)) from None
+    _remember_search_dirs(cfg)
+    if not hydra:
+        with open_dict(cfg):
+            del cfg["hydra"]
     check_known_keys(cfg)
     return cfg
+
+
+_SEARCH_DIRS: list[Path] = []
+
+
+def _remember_search_dirs(cfg: DictConfig) -> None:
+    # Where Hydra found configs (hydra.searchpath, SearchPathPlugins): a user's plugin folders.
+    sources = OmegaConf.select(cfg, "hydra.runtime.config_sources") or []
+    dirs = [_source_dir(str(s.schema), str(s.path)) for s in sources if str(s.provider) not in ("hydra", "main")]
+    _SEARCH_DIRS[:] = [d for d in dirs if d is not None and d != CONF_DIR]
+
+
+def _source_dir(schema: str, path: str) -> Path | None:
+    if schema == "file":
+        return Path(path).resolve()
+    if schema == "pkg":
+        from importlib import resources
+
+        try:
+            return Path(str(resources.files(path.replace("/", "."))))
+        except (ModuleNotFoundError, TypeError):
+            return None
+    return None
+
+
+def search_dirs() -> list[Path]:
+    """The config folders beside conf/ that the last composed config was searched in."""
+    return list(_SEARCH_DIRS)
 
 
 def one_line(error: BaseException) -> str:

@@ -38,7 +38,8 @@ ROOT_SCHEMA = "run_schema"
 
 
 # --- the groups configured in Python: option name -> the dataclass with its defaults ----------
-# A group option carries its own name (``algorithm.name``), which tables, folders and MLflow use.
+# A group option carries its own name (``algorithm.name``), which tables, folders and MLflow use,
+# and its ``_target_``: what builds it (plugins.py), the same door a user's plugin comes through.
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,7 @@ class LinearQOption(LinearQConfig):
     """``algorithm=linear_q``: linear Q(lambda), the learner of Tables II and III."""
 
     name: str = "linear_q"
+    _target_: str = "mediated_transfer.learners.linear_q.LinearQLearner.from_params"
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,7 @@ class DQNOption(DQNConfig):
     """``algorithm=dqn``: the deep Q-learner of Table IV (needs representation=network)."""
 
     name: str = "dqn"
+    _target_: str = "mediated_transfer.learners.dqn.DQNLearner.from_params"
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,7 @@ class SB3PPOOption(SB3PPOConfig):
     """``algorithm=sb3_ppo``: Stable-Baselines3's PPO (representation network, rbf or fsr)."""
 
     name: str = "sb3_ppo"
+    _target_: str = "mediated_transfer.learners.sb3.SB3Learner.ppo"
 
 
 @dataclass(frozen=True)
@@ -67,6 +71,7 @@ class SB3DQNOption(SB3DQNConfig):
     """``algorithm=sb3_dqn``: Stable-Baselines3's DQN (representation network, rbf or fsr)."""
 
     name: str = "sb3_dqn"
+    _target_: str = "mediated_transfer.learners.sb3.SB3Learner.dqn"
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,7 @@ class RBFOption(RBFConfig):
     """``representation=rbf``: 13829 Gaussian features (Table II)."""
 
     name: str = "rbf"
+    _target_: str = "mediated_transfer.learners.rbf.RBFRepresentation.from_params"
 
 
 @dataclass(frozen=True)
@@ -81,6 +87,7 @@ class FSROption(FSRConfig):
     """``representation=fsr``: 310 binary features (Table III)."""
 
     name: str = "fsr"
+    _target_: str = "mediated_transfer.learners.fsr.FSRRepresentation.from_params"
 
 
 @dataclass(frozen=True)
@@ -90,6 +97,8 @@ class NetworkOption:
     sb3_dqn: net_arch)."""
 
     name: str = "network"
+    _target_: Optional[str] = None
+    """No feature map: the learner gets the sensor vector itself."""
 
 
 PYTHON_OPTIONS: dict[str, dict[str, type]] = {
@@ -168,7 +177,9 @@ class RunConfig:
     rerun_stale: bool = MISSING
     save_learner: bool = MISSING
     lockstep: LockstepConfig = MISSING
-    strategy: str = MISSING
+    # A node with its _target_ (conf/strategy/*.yaml): the built-ins' parameters and a plugin's
+    # own, so its keys are checked against its target's signature (plugins.py), not here.
+    strategy: Any = MISSING
     n_source: int = MISSING
     paths: PathsConfig = MISSING
     scale: ScaleConfig = MISSING

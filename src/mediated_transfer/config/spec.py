@@ -20,13 +20,18 @@ if TYPE_CHECKING:
 
 def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
     """The RunSpec fields of a composed config (DictConfig or its plain-dict form)."""
-    algorithm = dict(_plain(cfg["algorithm"]))
-    representation = dict(_plain(cfg["representation"]))
+    algorithm, algorithm_target, algorithm_params = _option(cfg["algorithm"])
+    representation, representation_target, representation_params = _option(cfg["representation"])
+    strategy, strategy_target, strategy_params = _option(cfg["strategy"])
     scale = cfg["scale"]
     return {
-        "algorithm": algorithm.pop("name"),
-        "representation": representation.pop("name"),
-        "strategy": cfg["strategy"],
+        "algorithm": algorithm,
+        "algorithm_target": algorithm_target,
+        "representation": representation,
+        "representation_target": representation_target,
+        "strategy": strategy,
+        "strategy_target": strategy_target,
+        "strategy_params": strategy_params,
         "n_source": cfg["n_source"],
         "seed": cfg["seed"],
         "budget": scale["budget"],
@@ -37,9 +42,19 @@ def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
         "source_set_seed": cfg["source_set_seed"],
         "cache_dir": cfg["paths"]["cache_dir"],
         "world": dict(_plain(cfg["env"])),
-        "algorithm_params": algorithm,
-        "representation_params": representation,
+        "algorithm_params": algorithm_params,
+        "representation_params": representation_params,
     }
+
+
+def _option(node: Any) -> tuple[str, str | None, dict[str, Any]]:
+    """(name, _target_, parameters) of a group's node; a result recorded before strategies were
+    nodes holds the strategy's name alone (its target is then the built-in's of that name)."""
+    if isinstance(node, str):
+        return node, None, {}
+    values = dict(_plain(node))
+    name = values.pop("name")
+    return name, values.pop("_target_", None), values
 
 
 def run_spec(cfg: Mapping[str, Any]) -> "RunSpec":
@@ -98,9 +113,15 @@ def _check_lockstep(cfg: Mapping[str, Any]) -> None:
 
 
 def comparable(spec: "RunSpec") -> dict[str, Any]:
-    """What a run computes from: the spec without where source task sets are cached."""
+    """What a run computes from: the spec without where source task sets are cached and without
+    the dotted paths of its code (which code computed a run is provenance's, not the config's:
+    moving a class leaves the run the same run). A strategy without parameters adds no key, so
+    runs recorded before strategies had parameters keep their identity."""
     values = asdict(spec)
-    values.pop("cache_dir")
+    for key in ("cache_dir", "algorithm_target", "representation_target", "strategy_target"):
+        values.pop(key)
+    if not values["strategy_params"]:
+        values.pop("strategy_params")
     return values
 
 
@@ -126,7 +147,7 @@ def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
     # A key added since the run was made is missing from its record: it ran with what the key's
     # default keeps (a new key's default keeps the old behaviour), not with another value. Its
     # code digest differs anyway, so the run shows as stale (rerun_stale=true recomputes it).
-    for group in ("algorithm_params", "representation_params", "world"):
+    for group in ("algorithm_params", "representation_params", "strategy_params", "world"):
         if isinstance(stored.get(group), dict) and isinstance(wanted.get(group), dict):
             stored[group] = {**{k: v for k, v in wanted[group].items() if k not in stored[group]},
                              **stored[group]}

@@ -52,6 +52,10 @@ class WorldConfig:
     """Length of the L's long arm, from the corner M2 to the handle end M1."""
     tool_hook_length: float = 3.5
     """Length of the L's short arm, from the corner M2 to the hook end M3."""
+    tool_hook_angle: float = 90.0
+    """Angle in degrees from the handle to the hook, in (0, 180]: the mediator's shape. 90 is
+    the paper's L; 180 a straight stick (M1 and M3 its ends, M2 between them); between, a hook
+    opening outward (conf/env/ and docs/extending.md: a world variant is config)."""
     tool_width: float = 0.5
     """Thickness of both arms of the tool."""
     mediated_min_distance: float = 10.5
@@ -118,6 +122,8 @@ class WorldConfig:
                              f"of every environment step), got {self.substeps!r}")
         if not self.rotation_angle <= math.pi:
             raise ValueError(f"env.rotation_angle must lie in (0, pi], got {self.rotation_angle!r}")
+        if not 0.0 < self.tool_hook_angle <= 180.0:
+            raise ValueError(f"env.tool_hook_angle must lie in (0, 180] degrees, got {self.tool_hook_angle!r}")
         if not 0.0 < self.damping <= 1.0:
             raise ValueError(f"env.damping must lie in (0, 1], got {self.damping!r}")
         if not self.success_reward <= MAX_REWARD:
@@ -150,6 +156,15 @@ class WorldConfig:
     def max_origin_distance(self) -> float:
         """Upper bound of |M_i O|."""
         return self.world_radius
+
+    @property
+    def hook_end(self) -> tuple[float, float]:
+        """M3 in the tool's frame (corner M2 at its origin, the handle along +x): (0, hook
+        length) for the paper's L, exactly, so its curves do not change by a rounding."""
+        if self.tool_hook_angle == 90.0:
+            return 0.0, self.tool_hook_length
+        angle = math.radians(self.tool_hook_angle)
+        return self.tool_hook_length * math.cos(angle), self.tool_hook_length * math.sin(angle)
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -170,7 +170,7 @@ class MediatedInteractionEnv(gymnasium.Env):
         self._reward = float(config.success_reward)
         self._max_steps = config.max_episode_steps
         self._tool_limit = config.world_radius - config.tool_width / 2
-        self._lh, self._lk = config.tool_handle_length, config.tool_hook_length
+        self._lh, (self._hx, self._lk) = config.tool_handle_length, config.hook_end
         if config.move_frame == "tool":
             # An instance attribute over the method: the radial frame's step stays as it was.
             self._move_active = self._move_in_tool_frame
@@ -409,7 +409,10 @@ class MediatedInteractionEnv(gymnasium.Env):
         c, s = math.cos(w.tool_angle), math.sin(w.tool_angle)
         x, y = w.tool_x, w.tool_y
         x1, y1 = x + self._lh * c, y + self._lh * s
-        x3, y3 = x - self._lk * s, y + self._lk * c
+        if self._hx == 0.0:  # the paper's L, as it always was computed
+            x3, y3 = x - self._lk * s, y + self._lk * c
+        else:
+            x3, y3 = x + self._hx * c - self._lk * s, y + self._hx * s + self._lk * c
         tx, ty = w.target_x, w.target_y
         loc[0:8] = x1, y1, x, y, x3, y3, tx, ty
         # The observation without its one-hot: steps that move nothing only copy it. Written in

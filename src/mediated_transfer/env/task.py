@@ -31,10 +31,7 @@ def tool_picking_locations(tool_position, tool_angle: float, config: WorldConfig
     The tool frame has its origin at the corner M2, the handle along its x axis and the hook
     along its y axis; ``tool_angle`` is the world angle of that x axis.
     """
-    cx, cy = tool_position
-    c, s = math.cos(tool_angle), math.sin(tool_angle)
-    lh, lk = config.tool_handle_length, config.tool_hook_length
-    return np.array([[cx + lh * c, cy + lh * s], [cx, cy], [cx - lk * s, cy + lk * c]])
+    return np.array(_tool_points(tool_position, tool_angle, config))
 
 
 def sensor_vector(
@@ -57,8 +54,11 @@ def _tool_points(tool_position, tool_angle: float, config: WorldConfig):
     """M1, M2, M3 as (x, y) tuples (see tool_picking_locations)."""
     cx, cy = tool_position
     c, s = math.cos(tool_angle), math.sin(tool_angle)
-    lh, lk = config.tool_handle_length, config.tool_hook_length
-    return (cx + lh * c, cy + lh * s), (cx, cy), (cx - lk * s, cy + lk * c)
+    lh = config.tool_handle_length
+    hx, hy = config.hook_end
+    if hx == 0.0:  # the paper's L, computed as it always was (bit for bit)
+        return (cx + lh * c, cy + lh * s), (cx, cy), (cx - hy * s, cy + hy * c)
+    return (cx + lh * c, cy + lh * s), (cx, cy), (cx + hx * c - hy * s, cy + hx * s + hy * c)
 
 
 def _segment_distance(p, a, b) -> float:

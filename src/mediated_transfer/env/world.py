@@ -64,7 +64,8 @@ class World:
         self.tool = pymunk.Body()
         lh, lk, half = config.tool_handle_length, config.tool_hook_length, config.tool_width / 2
         handle = pymunk.Segment(self.tool, (0.0, 0.0), (lh, 0.0), half)
-        hook = pymunk.Segment(self.tool, (0.0, 0.0), (0.0, lk), half)
+        hook_end = config.hook_end
+        hook = pymunk.Segment(self.tool, (0.0, 0.0), hook_end, half)
         # Masses on the shapes, not the body: switching back to DYNAMIC recomputes the body's
         # mass, moment and centre of gravity from them.
         handle.mass = config.tool_mass * lh / (lh + lk)
@@ -77,7 +78,7 @@ class World:
         self._target_cp, self._tool_cp = self.target._body, self.tool._body
         self._space_cp = self.space._space
         #: M1, M2, M3 in the tool's body frame (rotation pivots).
-        self.tool_frame_locations = ((lh, 0.0), (0.0, 0.0), (0.0, lk))
+        self.tool_frame_locations = ((lh, 0.0), (0.0, 0.0), hook_end)
 
         self.physics_steps = 0
         """Physics substeps (``cpSpaceStep`` calls) made so far (the benchmark counts them)."""

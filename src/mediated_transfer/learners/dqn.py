@@ -339,6 +339,16 @@ class DQNLearner:
     initial weights come from a torch generator seeded with ``seed``.
     """
 
+    representations = ("network",)
+    """It learns its own features from the sensor vector."""
+
+    @classmethod
+    def from_params(cls, *, representation=None, num_actions: int, seed: int, world=None, **params) -> "DQNLearner":
+        """``algorithm=dqn``'s ``_target_``: the learner of the group's keys."""
+        from ..config.mapping import config_from_mapping
+
+        return cls(config_from_mapping(DQNConfig, params, "algorithm"), num_actions, seed)
+
     def __init__(self, config: DQNConfig | None = None, num_actions: int = 11, seed: int = 0):
         self.config = config = config if config is not None else DQNConfig()
         if isinstance(num_actions, bool) or not isinstance(num_actions, int) or num_actions < 1:
@@ -405,6 +415,12 @@ class DQNLearner:
         if not bool(torch.isfinite(self.network.flat).all()):
             return "the network's weights are not finite"
         return None
+
+    def td_error(self, observation, action: int, reward: float, next_observation, terminated: bool) -> float:
+        """delta of a transition under the online network (the target network's bootstrap is a
+        detail of the update; a signal for curricula), the learner is not changed."""
+        bootstrap = 0.0 if terminated else float(np.max(self.q_values(next_observation)))
+        return reward + self.config.gamma * bootstrap - float(self.q_values(observation)[action])
 
     def q_values(self, observation: np.ndarray) -> np.ndarray:
         """Q(s, .) of the online network (a copy)."""

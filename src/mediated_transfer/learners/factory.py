@@ -1,7 +1,11 @@
-"""Build a learner from names and plain parameter dicts (what the Hydra groups hold).
+"""Build a learner from its group options (what the Hydra groups hold): each option's
+``_target_`` builds it (plugins.py), a built-in's as a user's.
 
-``algorithm`` and ``representation`` are chosen independently on the command line, so invalid
-pairs (dqn with rbf) and unknown keys are caught here, before any work starts, with messages
+A learner's ``_target_`` is called as ``target(representation=<feature map or None>,
+num_actions=11, seed=<the run's learner stream>, world=<WorldConfig>, **algorithm keys)``; a
+representation's as ``target(**representation keys)``. ``algorithm`` and ``representation`` are
+chosen independently on the command line, so invalid pairs (dqn with rbf: a learner's
+``representations``) and unknown keys are caught here, before any work starts, with messages
 that name the allowed values.
 """
 
@@ -10,14 +14,15 @@ from __future__ import annotations
 import os
 from typing import Any, Mapping
 
+from .. import plugins
 from ..config.mapping import config_from_mapping
 from ..env.config import WorldConfig
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
 from .base import Learner
-from .dqn import DQNConfig, DQNLearner, ReplayBuffer, layer_shapes
-from .fsr import FSRConfig, FSRRepresentation
-from .linear_q import LinearQConfig, LinearQLearner
-from .rbf import RBFConfig, RBFRepresentation
+from .dqn import DQNConfig, ReplayBuffer, layer_shapes
+from .fsr import FSRConfig
+from .linear_q import LinearQConfig
+from .rbf import RBFConfig
 from . import sb3
 
 NUM_ACTIONS = len(PICKING_LOCATIONS) + 6  # 5 picks, 4 moves, 2 rotations
@@ -35,7 +40,6 @@ _ARCHITECTURE_KEYS = {"dqn": "algorithm.hidden_size / algorithm.num_hidden_layer
 
 _ALGORITHM_CONFIGS = {"linear_q": LinearQConfig, "dqn": DQNConfig, **sb3.CONFIGS}
 _REPRESENTATION_CONFIGS = {"rbf": RBFConfig, "fsr": FSRConfig, "network": None}
-_REPRESENTATIONS = {"rbf": RBFRepresentation, "fsr": FSRRepresentation}
 
 
 def build_config(cls, params: Mapping[str, Any], group: str):
@@ -58,10 +62,11 @@ def validate_learner_choice(
             f"representation={representation!r} does not go with algorithm={algorithm}; "
             f"allowed: {', '.join(allowed)}"
         )
-    algo_config = build_config(_ALGORITHM_CONFIGS[algorithm], algorithm_params or {}, "algorithm")
+    algo_config = build_config(_ALGORITHM_CONFIGS[algorithm], plugins.without_target(algorithm_params or {}),
+                               "algorithm")
     rep_cls = _REPRESENTATION_CONFIGS[representation]
     if rep_cls is None:
-        extra = sorted(k for k in (representation_params or {}) if k != "name")
+        extra = sorted(k for k in (representation_params or {}) if k not in ("name", "_target_"))
         if extra:
             raise ValueError(
                 f"representation={representation} takes no keys (its architecture is in "
@@ -69,7 +74,7 @@ def validate_learner_choice(
             )
         rep_config = None
     else:
-        rep_config = build_config(rep_cls, representation_params or {}, "representation")
+        rep_config = build_config(rep_cls, plugins.without_target(representation_params or {}), "representation")
     return algo_config, rep_config
 
 
@@ -144,6 +149,56 @@ def _size(n: float) -> str:
         n /= 1024
 
 
+LEARNER_METHODS = ("act", "observe", "end_episode", "divergence", "stats")
+"""What the run loop calls on every learner (learners/base.py)."""
+PROVIDED = ("representation", "num_actions", "seed", "world")
+"""What the framework passes to a learner's ``_target_`` besides the group's keys."""
+
+
+def learner_target(algorithm: str, target: str | None = None):
+    """The callable that builds ``algorithm`` (its ``_target_``, or the built-in's of that name)."""
+    return plugins.locate("algorithm", target or _builtin("algorithm", algorithm))
+
+
+def representation_target(representation: str, target: str | None = None):
+    """The callable that builds ``representation``'s feature map; None: the sensor vector itself."""
+    path = target or _builtin("representation", representation)
+    return None if path is None else plugins.locate("representation", path)
+
+
+def _builtin(group: str, name: str) -> str | None:
+    from ..config.targets import builtin_target
+
+    try:
+        return builtin_target(group, name)
+    except KeyError as error:
+        raise ValueError(error.args[0]) from None
+
+
+def check_learner(algorithm: str, representation: str, algorithm_params: Mapping[str, Any],
+                  representation_params: Mapping[str, Any], algorithm_target: str | None = None,
+                  representation_target_path: str | None = None) -> None:
+    """Every check of a learner before any work: its target importable, its interface, its
+    pairing with the representation, its keys (a built-in's values and memory too)."""
+    target = learner_target(algorithm, algorithm_target)
+    plugins.check_interface("algorithm", target, LEARNER_METHODS, "learner")
+    allowed = getattr(plugins.owner_class(target), "representations", None)
+    if allowed is not None and representation not in allowed:
+        raise ValueError(f"representation={representation!r} does not go with algorithm={algorithm}; "
+                         f"allowed: {', '.join(allowed)}")
+    features = representation_target(representation, representation_target_path)
+    if algorithm in ALGORITHMS and plugins.path_of(target) == plugins.path_of(learner_target(algorithm)):
+        algo_config, rep_config = validate_learner_choice(algorithm, representation, algorithm_params,
+                                                          representation_params)
+        check_memory(algorithm, algo_config, rep_config)
+        return
+    plugins.check_parameters("algorithm", target, algorithm_params, PROVIDED)
+    if features is not None:
+        plugins.check_parameters("representation", features, representation_params)
+    elif representation_params:
+        raise ValueError(f"representation={representation} takes no keys; got {', '.join(sorted(representation_params))}")
+
+
 def make_learner(
     algorithm: str,
     representation: str,
@@ -151,20 +206,19 @@ def make_learner(
     representation_params: Mapping[str, Any] | None = None,
     world: WorldConfig | None = None,
     seed: int = 0,
+    algorithm_target: str | None = None,
+    representation_target_path: str | None = None,
 ) -> Learner:
-    """A fresh learner for the 11-dim sensor vector and the 11 actions of the world."""
-    algo_config, rep_config = validate_learner_choice(
-        algorithm, representation, algorithm_params, representation_params
-    )
-    if algorithm == "dqn":
-        return DQNLearner(algo_config, num_actions=NUM_ACTIONS, seed=seed)
-    features = make_features(representation, rep_config)
-    if algorithm in SB3_ALGORITHMS:
-        # Acts only; run_sb3.py builds its own, on the environment it learns on.
-        return sb3.SB3Learner(algorithm, algo_config, features, world=world, seed=seed)
-    return LinearQLearner(algo_config, features, num_actions=NUM_ACTIONS, seed=seed)
+    """A fresh learner for the 11-dim sensor vector and the 11 actions of the world (SB3's
+    learners here only act; run_sb3.py builds the one that learns, on its environment)."""
+    target = learner_target(algorithm, algorithm_target)
+    features = make_features(representation, representation_params, representation_target_path)
+    return plugins.call(target, plugins.without_target(algorithm_params or {}), representation=features,
+                        num_actions=NUM_ACTIONS, seed=seed, world=world or WorldConfig())
 
 
-def make_features(representation: str, rep_config):
-    """The feature map phi(s) of a representation's config; None for ``network`` (no config)."""
-    return None if rep_config is None else _REPRESENTATIONS[representation](rep_config)
+def make_features(representation: str, representation_params: Mapping[str, Any] | None = None,
+                  target: str | None = None):
+    """The feature map phi(s) of a representation option; None for ``network`` (no feature map)."""
+    build = representation_target(representation, target)
+    return None if build is None else plugins.call(build, plugins.without_target(representation_params or {}))

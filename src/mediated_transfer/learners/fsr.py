@@ -57,6 +57,13 @@ class FSRRepresentation:
 
     name = "fsr"
 
+    @classmethod
+    def from_params(cls, **params) -> "FSRRepresentation":
+        """``representation``'s ``_target_``: the feature map of the group's keys."""
+        from ..config.mapping import config_from_mapping
+
+        return cls(config_from_mapping(FSRConfig, params, "representation"))
+
     def __init__(self, config: FSRConfig = FSRConfig()):
         self.config = config
         self.num_features = NUM_DISTANCES * config.distance_bins + NUM_BINARY * BINARY_BINS

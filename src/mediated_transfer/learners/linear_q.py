@@ -124,6 +124,17 @@ class LinearQLearner:
     counter, once per episode, so calling ``end_episode`` after a terminal transition is safe.
     """
 
+    representations = ("rbf", "fsr")
+    """The representation options it learns on (conf: representation=...)."""
+
+    @classmethod
+    def from_params(cls, *, representation: Representation, num_actions: int, seed: int, world=None,
+                    **params) -> "LinearQLearner":
+        """``algorithm=linear_q``'s ``_target_``: the learner of the group's keys."""
+        from ..config.mapping import config_from_mapping
+
+        return cls(config_from_mapping(LinearQConfig, params, "algorithm"), representation, num_actions, seed)
+
     def __init__(self, config: LinearQConfig, representation: Representation, num_actions: int = 11, seed: int = 0):
         if isinstance(num_actions, bool) or not isinstance(num_actions, (int, np.integer)) or num_actions < 1:
             raise ValueError(f"num_actions must be an integer >= 1, got {num_actions!r}")
@@ -318,6 +329,12 @@ class LinearQLearner:
         q = np.empty(self.num_actions)
         _q_values(self._theta, self._eval_index, self._eval_value, n, q)
         return q
+
+    def td_error(self, observation, action: int, reward: float, next_observation, terminated: bool) -> float:
+        """delta of a transition under the current weights (before ``observe`` learns from it);
+        a signal for curricula (transfer/strategy.py), the learner is not changed."""
+        bootstrap = 0.0 if terminated else float(np.max(self.q_values(next_observation)))
+        return reward + self.config.gamma * bootstrap - float(self.q_values(observation)[action])
 
     def trace(self) -> np.ndarray:
         """The eligibility trace as a dense (num_actions, num_features) array."""

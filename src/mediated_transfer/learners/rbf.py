@@ -97,6 +97,13 @@ class RBFRepresentation:
 
     name = "rbf"
 
+    @classmethod
+    def from_params(cls, **params) -> "RBFRepresentation":
+        """``representation``'s ``_target_``: the feature map of the group's keys."""
+        from ..config.mapping import config_from_mapping
+
+        return cls(config_from_mapping(RBFConfig, params, "representation"))
+
     def __init__(self, config: RBFConfig = RBFConfig()):
         self.config = config
         bins = [config.tool_target_bins] * 3 + [config.tool_origin_bins] * 3

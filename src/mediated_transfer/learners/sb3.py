@@ -299,6 +299,28 @@ class SB3Learner:
     learner, a learner that only acts).
     """
 
+    representations = REPRESENTATIONS
+    run_loop = "mediated_transfer.run_sb3.execute_sb3_run"
+    """SB3 learns in its own loop, not the project's (run.py)."""
+
+    @classmethod
+    def ppo(cls, *, representation=None, num_actions: int, seed: int, world=None, **params) -> "SB3Learner":
+        """``algorithm=sb3_ppo``'s ``_target_`` (a learner that acts; run_sb3.py makes the one that learns)."""
+        return cls.of("sb3_ppo", params, representation, world, seed, num_actions)
+
+    @classmethod
+    def dqn(cls, *, representation=None, num_actions: int, seed: int, world=None, **params) -> "SB3Learner":
+        """``algorithm=sb3_dqn``'s ``_target_``."""
+        return cls.of("sb3_dqn", params, representation, world, seed, num_actions)
+
+    @classmethod
+    def of(cls, algorithm: str, params, representation, world, seed: int, num_actions: int = NUM_ACTIONS,
+           env=None) -> "SB3Learner":
+        from ..config.mapping import config_from_mapping
+
+        config = config_from_mapping(CONFIGS[algorithm], params, "algorithm")
+        return cls(algorithm, config, representation, world, seed, env=env, num_actions=num_actions)
+
     def __init__(self, algorithm: str, config, representation=None, world=None, seed: int = 0,
                  env=None, num_actions: int = NUM_ACTIONS):
         from ..env.mediated_env import MediatedInteractionEnv

@@ -21,10 +21,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 
 from ..env.mediated_env import MediatedInteractionEnv
-from ..learners.factory import SB3_ALGORITHMS, make_learner
+from ..learners.factory import make_learner
 from ..results import RunResult
-from ..run import Curve, EvaluationFn, FinishFn, ProgressFn, RunSpec, RunStreams, run_result
-from ..transfer.strategies import report_episode, start_episode
+from ..run import Curve, EvaluationFn, FinishFn, ProgressFn, RunSpec, RunStreams, own_run_loop, run_result
+from ..transfer.strategy import EpisodeOutcome, start_episode, wants_td_error
 from .group import DEVICES, LearnerGroup, PerSeedLearners
 
 log = logging.getLogger("mediated_transfer")
@@ -57,6 +57,8 @@ class _Run:
     observation: object = None
     task: object = None
     in_episode: bool = False
+    episode_return: float = 0.0
+    length: int = 0
     source_phase_end: int | None = None
     first_target_reward: int | None = None
     done: bool = False
@@ -76,8 +78,8 @@ def check_group(specs: Sequence[RunSpec]) -> None:
     seeds = [s.seed for s in specs]
     if len(set(seeds)) != len(seeds):
         raise ValueError(f"a lockstep group's seeds must be distinct, got {seeds}")
-    if first.algorithm in SB3_ALGORITHMS:
-        raise ValueError(f"algorithm={first.algorithm} learns in Stable-Baselines3's own loop; "
+    if own_run_loop(first) is not None:
+        raise ValueError(f"algorithm={first.algorithm} learns in its own loop (e.g. Stable-Baselines3's); "
                          "lockstep.runs must be 1 for it")
 
 
@@ -89,7 +91,9 @@ def make_group(specs: Sequence[RunSpec], streams: Sequence[RunStreams], device: 
     if device == "cpu":
         return PerSeedLearners([
             make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                         spec.representation_params, world=spec.world, seed=s.learner_seed)
+                         spec.representation_params, world=spec.world, seed=s.learner_seed,
+                         algorithm_target=spec.algorithm_target,
+                         representation_target_path=spec.representation_target)
             for s in streams])
     if spec.algorithm != "dqn":
         raise ValueError(f"lockstep.device={device} stacks deep Q-networks; algorithm={spec.algorithm} "
@@ -120,6 +124,9 @@ def execute_lockstep(specs: Sequence[RunSpec], hooks: Sequence[RunHooks] | None 
     if len(hooks) != len(specs):
         raise ValueError(f"{len(specs)} runs but {len(hooks)} sets of callbacks")
     streams = [RunStreams.of(spec) for spec in specs]
+    if any(wants_td_error(s.strategy) for s in streams):
+        raise ValueError(f"strategy={specs[0].strategy} asks for the learner's TD errors, which a lockstep "
+                         "group does not compute: lockstep.runs must be 1 for it")
     if group is None:
         group = make_group(specs, streams, device)
     runs = []
@@ -148,6 +155,7 @@ def execute_lockstep(specs: Sequence[RunSpec], hooks: Sequence[RunHooks] | None 
             if not run.in_episode:
                 run.observation, _, run.task = start_episode(run.env, run.streams.strategy, run.env_seed)
                 run.env_seed, run.in_episode = None, True
+                run.episode_return, run.length = 0.0, 0
         actions = group.act(active, [runs[k].observation for k in active], True)
         outcomes = []
         for k, action in zip(active, actions):
@@ -161,6 +169,8 @@ def execute_lockstep(specs: Sequence[RunSpec], hooks: Sequence[RunHooks] | None 
         for k, reward, terminated, truncated in outcomes:
             run = runs[k]
             run.step += 1
+            run.episode_return += reward
+            run.length += 1
             step, spec = run.step, run.spec
             if reward > 0 and run.task is None and run.first_target_reward is None:
                 run.first_target_reward = step
@@ -171,10 +181,11 @@ def execute_lockstep(specs: Sequence[RunSpec], hooks: Sequence[RunHooks] | None 
             if terminated or truncated or step >= spec.budget or run.curve.failure is not None:
                 run.in_episode = False
                 group.end_episode(k)
-                if run.task is not None:
-                    report_episode(run.streams.strategy, run.task, solved=bool(terminated))
-                    if not run.streams.strategy.in_source_phase:
-                        run.source_phase_end = step
+                strategy = run.streams.strategy
+                was_done = strategy.done
+                strategy.report(EpisodeOutcome(run.task, bool(terminated), run.episode_return, run.length, step))
+                if not was_done and strategy.done:
+                    run.source_phase_end = step
                 if step >= spec.budget or run.curve.failure is not None:
                     ended.append(k)
         for k in ended:

@@ -32,7 +32,7 @@ from .compose import (USER_ERRORS, ReportError, compose_experiment, experiment_n
                       split_experiments, variant_of)
 from .figures import plot_loss_bars
 from .formats import write_csv, write_markdown
-from .paper import SCHEMES, paper_rows
+from .paper import paper_rows, scheme
 
 USAGE = __doc__
 
@@ -78,7 +78,7 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
         write_markdown(texts, out / f"{stem}.md", notes, ["left"] + ["right"] * (len(texts.columns) - 1)),
         write_csv(numbers(sweeps, cells), out / f"{stem}.csv"),
     ]
-    labels = [SCHEMES[s] if s == "none" else f"{s} {n}" for s, n in cells]
+    labels = [scheme(s) if s == "none" else f"{s} {n}" for s, n in cells]
     files.append(plot_loss_bars(labels, reward_loss_bars(sweeps, cells), f"{title}: reward loss per table cell",
                                 f"scale {first.scale.name}: " + " vs ".join(s.label for s in sweeps)
                                 + "; mean of runs +/- SEM, lower is better", out / f"{stem}.png"))

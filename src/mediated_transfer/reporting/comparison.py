@@ -17,7 +17,7 @@ from ..sensitivity.measures import loss_after_learning, median_or_none
 from .collect import CellRuns, variant_label
 from .figures import Bars
 from .formats import MARKDOWN
-from .paper import SCHEMES, PaperRow
+from .paper import PaperRow, scheme
 from .tables import reward_loss_text, steps_text
 
 
@@ -89,7 +89,7 @@ def reward_loss_difference(summary: dict | None, first: dict | None) -> tuple[fl
 def shown(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
     """One row per table cell, a group of columns per sweep, as read."""
     m, first = MARKDOWN, sweeps[0]
-    columns: dict[str, list[str]] = {"Scheme": [SCHEMES[s] for s, _ in cells],
+    columns: dict[str, list[str]] = {"Scheme": [scheme(s) for s, _ in cells],
                                      "N_source": [str(n) for _, n in cells]}
     for sweep in sweeps:
         summaries = [sweep.summaries.get(f"{s}_{n}") for s, n in cells]
@@ -116,7 +116,7 @@ def shown(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
 def numbers(sweeps: list[Sweep], cells: list[tuple[str, int]]) -> pd.DataFrame:
     """The same as numbers; a sweep's columns end in ``[<variant>]`` (empty: not run, never reached)."""
     first = sweeps[0]
-    frame = pd.DataFrame({"scheme": [SCHEMES[s] for s, _ in cells], "strategy": [s for s, _ in cells],
+    frame = pd.DataFrame({"scheme": [scheme(s) for s, _ in cells], "strategy": [s for s, _ in cells],
                           "n_source": [n for _, n in cells]})
     for sweep in sweeps:
         summaries = [sweep.summaries.get(f"{s}_{n}") or {} for s, n in cells]

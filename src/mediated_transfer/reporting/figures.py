@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .paper import SCHEMES
+from .paper import scheme
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ def fastest_transfer(summaries: dict[str, dict], strategies: dict[str, tuple[str
 
 
 def cell_label(strategy: str, n_source: int, n_runs: int) -> str:
-    what = SCHEMES[strategy] if strategy == "none" else f"{SCHEMES[strategy]}, N_source = {n_source}"
+    what = scheme(strategy) if strategy == "none" else f"{scheme(strategy)}, N_source = {n_source}"
     return f"{what} ({n_runs} run{'' if n_runs == 1 else 's'})"
 
 

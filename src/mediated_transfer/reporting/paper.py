@@ -17,6 +17,11 @@ SCHEMES = {"none": "without transfer", "regular": "regular transfer", "scaffolde
 STRATEGY_OF_SCHEME = {v: k for k, v in SCHEMES.items()}
 
 
+def scheme(strategy: str) -> str:
+    """How a report names a strategy: the paper's words for its own, a plugin's by its name."""
+    return SCHEMES.get(strategy, strategy)
+
+
 @dataclass(frozen=True)
 class PaperRow:
     table: str

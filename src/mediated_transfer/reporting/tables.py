@@ -15,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 
 from .formats import LATEX, MARKDOWN, Markup, write_csv, write_latex, write_markdown
-from .paper import SCHEMES, PaperRow
+from .paper import PaperRow, scheme
 
 
 @dataclass(frozen=True)
@@ -134,7 +134,7 @@ def _texts(row: TableRow, m: Markup) -> list[str]:
         "-" if p.time_to_threshold is None else f"{m.approx}{p.time_to_threshold:,}",
     ]
     runs = f"{row.n_runs}/{row.expected_runs}" + (f" ({row.failed} failed)" if row.failed else "")
-    return [SCHEMES[row.strategy], str(row.n_source), runs,
+    return [scheme(row.strategy), str(row.n_source), runs,
             *measured, *published]
 
 
@@ -144,7 +144,7 @@ def numbers(rows: list[TableRow], header: TableHeader) -> pd.DataFrame:
     for r in rows:
         s, p = r.summary or {}, r.paper
         records.append({
-            "scheme": SCHEMES[r.strategy], "strategy": r.strategy, "n_source": r.n_source,
+            "scheme": scheme(r.strategy), "strategy": r.strategy, "n_source": r.n_source,
             "scale": header.scale, "variant": header.variant, "budget": header.budget,
             "eval_points": header.eval_points, "eval_episodes": header.eval_episodes,
             "runs": r.n_runs, "expected_runs": r.expected_runs, "failed_runs": r.failed,

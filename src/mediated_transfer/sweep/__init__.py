@@ -56,13 +56,15 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
         if len(fixed) < len(overrides):
             swept = [o.input_line for o in parsed if o.is_sweep_override()]
             raise ConfigError(f"{' '.join(swept)} sweeps over values: add -m (--multirun)")
-        run_spec(base)
+        _try_plugins(run_spec(base))
         _prepare_tracking(base)  # a store that cannot be reached stops the run now, in one line
         return None
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
     distinct = sorted({_without_seed(job) for job in jobs})
-    configs = {job: compose_config(list(job), hydra=True) for job in distinct}
+    # Where a user's plugins live counts for every job (hydra.searchpath is Hydra's own key).
+    searchpath = [o for o in overrides if o.lstrip("+").startswith("hydra.searchpath")]
+    configs = {job: compose_config(list(job) + searchpath, hydra=True) for job in distinct}
     specs = {job: run_spec(cfg) for job, cfg in configs.items()}
     plans: dict[Path, list[str]] = {}
     recompute: dict[Path, list[str]] = {}
@@ -80,6 +82,8 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
         plans.setdefault(sweep_dir, []).append(run)
     _prepare_tracking(base)
     _warm_source_task_cache(list(specs.values()))
+    for spec in specs.values():
+        _try_plugins(spec)
     for sweep_dir, runs in plans.items():
         write_plan(sweep_dir, runs, recompute.get(sweep_dir, []))
         log.info("sweep %s: %d runs in %s", base.name, len(runs), sweep_dir)
@@ -146,6 +150,28 @@ def _prepare_tracking(config: DictConfig) -> None:
             tracking.prepare(tracking.TrackingSettings.from_config(config.tracking), experiment=str(config.name))
         except ValueError as error:
             raise ConfigError(str(error)) from None
+
+
+def _try_plugins(spec: "RunSpec") -> None:
+    """Build a run's plugins once (a strategy, learner or representation from outside the
+    package), so that a value they refuse stops the command now, in one line naming it."""
+    from .. import plugins
+    from ..learners.factory import learner_target, make_learner
+    from ..run import RunStreams
+
+    foreign = {"strategy": spec.strategy_class(), "algorithm": learner_target(spec.algorithm, spec.algorithm_target)}
+    foreign = {k: t for k, t in foreign.items() if not plugins.path_of(t).startswith("mediated_transfer.")}
+    if not foreign:
+        return
+    try:
+        if "strategy" in foreign:
+            RunStreams.of(spec)
+        if "algorithm" in foreign:
+            make_learner(spec.algorithm, spec.representation, spec.algorithm_params, spec.representation_params,
+                         world=spec.world, algorithm_target=spec.algorithm_target,
+                         representation_target_path=spec.representation_target)
+    except (ValueError, TypeError) as error:
+        raise ConfigError(str(error).strip().splitlines()[0]) from None
 
 
 def _warm_source_task_cache(specs: Sequence["RunSpec"]) -> None:

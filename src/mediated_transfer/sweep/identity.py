@@ -50,7 +50,7 @@ def run_tags(cfg: DictConfig, folder: Path, spec: "RunSpec", variant: str, code_
         "sweep": f"{cfg.name}/{cfg.scale.name}",
         "scale": str(cfg.scale.name),
         "seed": str(cfg.seed),
-        "strategy": str(cfg.strategy),
+        "strategy": str(cfg.strategy.name),
         "n_source": str(cfg.n_source),
         "variant": variant_label(variant),
         "run_key": f"{where}@{spec_digest(spec)}.{code_digest}",

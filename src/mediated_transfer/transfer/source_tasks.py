@@ -43,6 +43,9 @@ METHOD_VERSION = 1
 #: only), left out of the cache key: the move frame's readings share one set, and the files
 #: cached before the field existed stay valid.
 NOT_IN_CACHE_KEY = ("move_frame",)
+KEYS_ADDED_LATER = {"tool_hook_angle": 90.0}
+"""World keys added after sets were cached, with the value every earlier set had: at that value
+a key stays out of the cache key, so the files cached before it stay valid."""
 
 
 @dataclass(frozen=True)
@@ -221,7 +224,8 @@ def _cache_path(cache_dir, n_source, world, pool_size, seed, clustering) -> Path
             "n_source": int(n_source),
             "pool_size": int(pool_size),
             "seed": int(seed),
-            "world": {k: v for k, v in world.to_dict().items() if k not in NOT_IN_CACHE_KEY},
+            "world": {k: v for k, v in world.to_dict().items()
+                      if k not in NOT_IN_CACHE_KEY and KEYS_ADDED_LATER.get(k, object()) != v},
             "clustering": asdict(clustering),
         },
         sort_keys=True,

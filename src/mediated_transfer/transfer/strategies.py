@@ -1,61 +1,40 @@
-"""Transfer strategies: which source task the next episode learns, until the source set C is
-solved and learning continues on the target task.
-
-A strategy has one job: choose the next source task and hear whether the agent solved it.
-Before every episode ``next_task()`` is asked: a Task means "learn this source task", None
-means "source phase over, learn the target task" (and stays None). After a source episode
-``report(solved)`` is called; target episodes are not reported. Learning never stops between
-the phases: the strategy only decides which task an episode starts from. ``start_episode`` and
-``report_episode`` below are that protocol, shared by the experiment loop (run.py) and the
-Gymnasium wrapper (wrapper.py), so both drive a strategy the same way.
+"""The paper's transfer strategies: which source task the next episode learns, until the source
+set C is solved and learning continues on the target task. They come through the same door as
+a user's strategy (transfer/strategy.py, conf/strategy/*.yaml).
 
 - ``none``: no source phase (the paper's "without transfer", N_source = 0).
 - ``regular`` (Algorithm 1, Strategy 1): a uniformly random task of C; removed when solved.
 - ``scaffolded`` (Algorithm 2, Strategy 2): while nothing is solved, a random task of C;
   then a random solved task k and the unsolved task most similar to k by the cosine
   similarity of their sensor vectors (eq. 3). Solved tasks move from C to C_solved.
+
+Each is done once C is empty; target-task episodes' outcomes change nothing.
 """
 
 from __future__ import annotations
 
 import os
-from typing import Any, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
 from ..env.task import Task
-
-STRATEGIES = ("none", "regular", "scaffolded")
-
-
-@runtime_checkable
-class TransferStrategy(Protocol):
-    name: str
-
-    def next_task(self) -> Task | None:
-        """The source task of the next episode; None once C is empty (target-task phase)."""
-
-    def report(self, solved: bool) -> None:
-        """Outcome of the episode on the task ``next_task`` returned last."""
-
-    @property
-    def in_source_phase(self) -> bool:
-        """True while unsolved source tasks remain."""
-
-    @property
-    def solved_count(self) -> int:
-        """Source tasks solved so far (|C_solved|)."""
+from .strategy import EpisodeOutcome, StrategyContext
 
 
 class _SourcePhase:
     """Book-keeping shared by the strategies: C as a list of task indices, the pending task."""
 
     name = ""
+    source_tasks = "required"  # a transfer strategy without C would be "none" under another name
 
-    def __init__(self, tasks: Sequence[Task], rng: np.random.Generator):
+    def __init__(self, context: StrategyContext):
+        rng = context.rng
         if not isinstance(rng, np.random.Generator):
             raise TypeError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
-        self.tasks = list(tasks)
+        self.tasks = list(context.source_tasks)
+        if not self.tasks:
+            raise ValueError(f"strategy {self.name!r} needs source tasks: n_source must be >= 1, got 0 "
+                             "(use strategy=none for learning without transfer)")
         self.rng = rng
         # Unsolved task indices in ascending order: C. A list, because removal happens once
         # per solved task while sampling happens every episode.
@@ -70,8 +49,9 @@ class _SourcePhase:
         return len(self.tasks)
 
     @property
-    def in_source_phase(self) -> bool:
-        return bool(self._unsolved)
+    def done(self) -> bool:
+        """C is empty: the target task from now on."""
+        return not self._unsolved
 
     @property
     def solved_count(self) -> int:
@@ -92,14 +72,13 @@ class _SourcePhase:
         self._pending = self._choose()
         return self.tasks[self._pending]
 
-    def report(self, solved: bool) -> None:
+    def report(self, outcome: EpisodeOutcome) -> None:
+        if outcome.task is None:  # a target-task episode: C does not change
+            return
         if self._pending is None:
-            raise RuntimeError(
-                f"{self.name}: report() without a pending source task (target-task episodes "
-                "are not reported)"
-            )
+            raise RuntimeError(f"{self.name}: report() of a source task that next_task() did not hand out")
         index, self._pending = self._pending, None
-        if solved:
+        if outcome.solved:
             self._unsolved.remove(index)
             self._solved(index)
 
@@ -115,16 +94,23 @@ class NoTransfer:
     target task."""
 
     name = "none"
-    in_source_phase = False
+    source_tasks = "none"
+    done = True
     solved_count = 0
     remaining = 0
     n_source = 0
 
+    def __init__(self, context: StrategyContext | None = None):
+        if context is not None and context.n_source:
+            raise ValueError(f"strategy 'none' has no source phase but got {context.n_source} source tasks; "
+                             "use n_source=0 with strategy=none, or strategy=regular / scaffolded")
+
     def next_task(self) -> None:
         return None
 
-    def report(self, solved: bool) -> None:
-        raise RuntimeError("none: report() without a pending source task (no source phase)")
+    def report(self, outcome: EpisodeOutcome) -> None:
+        if outcome.task is not None:
+            raise RuntimeError("none: report() of a source task (no source phase)")
 
 
 class RegularTransfer(_SourcePhase):
@@ -147,9 +133,9 @@ class ScaffoldedTransfer(_SourcePhase):
 
     name = "scaffolded"
 
-    def __init__(self, tasks: Sequence[Task], sensors, rng: np.random.Generator):
-        super().__init__(tasks, rng)
-        sensors = np.asarray(sensors, dtype=float)
+    def __init__(self, context: StrategyContext):
+        super().__init__(context)
+        sensors = np.asarray(context.sensors, dtype=float)
         if sensors.ndim != 2 or sensors.shape[0] != self.n_source:
             raise ValueError(
                 f"sensors must have one row per source task ({self.n_source}), got shape "
@@ -181,57 +167,3 @@ class ScaffoldedTransfer(_SourcePhase):
     def _solved(self, index: int) -> None:
         self._solved_mask[index] = True
         self._solved_list.append(index)
-
-
-def start_episode(env, strategy: TransferStrategy, seed: int | None = None) -> tuple[Any, dict, Task | None]:
-    """Reset ``env`` (a target-scenario MediatedInteractionEnv, possibly wrapped) to the episode
-    ``strategy`` chooses: its next source task, or, once C is empty, a target task that ``env``
-    samples from its own seeded generator. Returns (observation, info, task); task is None for
-    a target-task episode."""
-    task = strategy.next_task()
-    observation, info = env.reset(seed=seed, options=None if task is None else {"task": task})
-    return observation, info, task
-
-
-def report_episode(strategy: TransferStrategy, task: Task | None, solved: bool) -> None:
-    """Tell ``strategy`` whether the episode that ``start_episode`` began on ``task`` solved
-    it; a target-task episode (task None) is not reported."""
-    if task is not None:
-        strategy.report(solved=solved)
-
-
-def make_strategy(
-    name: str,
-    tasks: Sequence[Task],
-    sensors=None,
-    rng: np.random.Generator | None = None,
-) -> TransferStrategy:
-    """The strategy called ``name`` over the source task set ``tasks``.
-
-    ``none`` needs an empty task set (N_source = 0); ``regular`` and ``scaffolded`` need a
-    non-empty one (N_source >= 1), because a transfer strategy without source tasks would
-    silently be the no-transfer baseline under another name. ``scaffolded`` needs ``sensors``
-    (N_source x 11 sensor vectors); both random strategies need ``rng``.
-    """
-    if name not in STRATEGIES:
-        raise ValueError(f"unknown strategy {name!r}; allowed: {', '.join(STRATEGIES)}")
-    tasks = list(tasks)
-    if name == "none":
-        if tasks:
-            raise ValueError(
-                f"strategy 'none' has no source phase but got {len(tasks)} source tasks; "
-                "use n_source=0 with strategy=none, or strategy=regular / scaffolded"
-            )
-        return NoTransfer()
-    if not tasks:
-        raise ValueError(
-            f"strategy {name!r} needs source tasks: n_source must be >= 1, got 0 "
-            "(use strategy=none for learning without transfer)"
-        )
-    if rng is None:
-        raise ValueError(f"strategy {name!r} samples source tasks: pass rng")
-    if name == "regular":
-        return RegularTransfer(tasks, rng)
-    if sensors is None:
-        raise ValueError("strategy 'scaffolded' compares sensor vectors (eq. 3): pass sensors")
-    return ScaffoldedTransfer(tasks, sensors, rng)

@@ -37,16 +37,16 @@ from collections.abc import Mapping
 import gymnasium
 
 from ..env.mediated_env import MediatedInteractionEnv
-from .strategies import TransferStrategy, report_episode, start_episode
+from .strategy import EpisodeOutcome, Strategy, solved_count, start_episode
 
 # Which wrapper has a source episode open on a strategy (weak both ways: neither is kept alive).
-_OPEN_EPISODES: "weakref.WeakKeyDictionary[TransferStrategy, weakref.ref]" = weakref.WeakKeyDictionary()
+_OPEN_EPISODES: "weakref.WeakKeyDictionary[Strategy, weakref.ref]" = weakref.WeakKeyDictionary()
 
 
 class TransferWrapper(gymnasium.Wrapper):
     """Episodes chosen by a transfer strategy (``strategy=none``, ``regular`` or ``scaffolded``)."""
 
-    def __init__(self, env: gymnasium.Env, strategy: TransferStrategy):
+    def __init__(self, env: gymnasium.Env, strategy: Strategy):
         super().__init__(env)
         base = env.unwrapped
         if not isinstance(base, MediatedInteractionEnv):
@@ -55,12 +55,13 @@ class TransferWrapper(gymnasium.Wrapper):
         if base.scenario != "target":
             raise ValueError(f"TransferWrapper needs an environment of scenario 'target' (its reset "
                              f"samples the target tasks), got scenario {base.scenario!r}")
-        if not isinstance(strategy, TransferStrategy):
-            raise ValueError(f"strategy must be a transfer strategy (transfer.make_strategy), got "
-                             f"{type(strategy).__name__}")
+        if not isinstance(strategy, Strategy):
+            raise ValueError(f"strategy must be a transfer strategy (transfer/strategy.py: next_task, "
+                             f"report, done), got {type(strategy).__name__}")
         self.strategy = strategy
         self._task = None
         self._open = False
+        self._return, self._length, self._steps = 0.0, 0, 0
 
     @property
     def source_phase(self) -> bool:
@@ -81,6 +82,7 @@ class TransferWrapper(gymnasium.Wrapper):
                                "(sub-)environment its own strategy, or use one environment")
         observation, info, self._task = start_episode(self.env, self.strategy, seed)
         self._open = True
+        self._return, self._length = 0.0, 0
         if self._task is not None:
             _OPEN_EPISODES[self.strategy] = weakref.ref(self)
         return observation, self._info(info)
@@ -89,6 +91,9 @@ class TransferWrapper(gymnasium.Wrapper):
         if not self._open:
             raise RuntimeError("TransferWrapper: the episode is over (or never started): call reset() first")
         observation, reward, terminated, truncated, info = self.env.step(action)
+        self._return += float(reward)
+        self._length += 1
+        self._steps += 1
         source_phase = self.source_phase
         if terminated or truncated:
             self._close(solved=bool(terminated))
@@ -97,7 +102,7 @@ class TransferWrapper(gymnasium.Wrapper):
         return observation, reward, terminated, truncated, info
 
     def _close(self, solved: bool) -> None:
-        report_episode(self.strategy, self._task, solved)
+        self.strategy.report(EpisodeOutcome(self._task, solved, self._return, self._length, self._steps))
         if self._task is not None:
             _OPEN_EPISODES.pop(self.strategy, None)
         self._task, self._open = None, False
@@ -105,11 +110,11 @@ class TransferWrapper(gymnasium.Wrapper):
     def _info(self, info: dict) -> dict:
         info = dict(info)
         info["source_phase"] = self.source_phase
-        info["solved_count"] = int(self.strategy.solved_count)
+        info["solved_count"] = solved_count(self.strategy)
         return info
 
 
-def _check_process(strategy: TransferStrategy) -> None:
+def _check_process(strategy: Strategy) -> None:
     owner = getattr(strategy, "owner_pid", None)  # None: a strategy without C (none)
     if owner is not None and owner != os.getpid():
         raise RuntimeError(

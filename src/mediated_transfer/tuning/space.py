@@ -194,9 +194,9 @@ def load_search_space(path: str | Path) -> SearchSpace:
     in_tables = sorted(s for s in seeds if 0 <= s < table_seeds)
     if in_tables:
         fail("seeds", f"{in_tables} are table seeds (0-{table_seeds - 1}); tuning seeds must not be")
-    if str(cfg.strategy) != "none" or int(cfg.n_source) != 0:
+    if str(cfg.strategy.name) != "none" or int(cfg.n_source) != 0:
         fail("base", f"must tune without transfer (strategy=none, n_source=0), got "
-                     f"strategy={cfg.strategy}, n_source={cfg.n_source}")
+                     f"strategy={cfg.strategy.name}, n_source={cfg.n_source}")
 
     params = []
     defaults = {}
