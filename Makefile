@@ -43,7 +43,7 @@ $(VENV)/.installed-py$(PYVER)-%: pyproject.toml constraints.txt | check-python
 install: $(STAMP) ## Create .venv and install the project (EXTRAS=deep,test; EXTRAS=test: no torch)
 
 test: $(FULL_STAMP) ## Run the whole test suite (creates .venv with everything first)
-	$(BIN)/python -m pytest -q
+	REQUIRE_DEEP=1 $(BIN)/python -m pytest -q
 
 test-no-torch: $(STAMP) ## The suite without torch: its tests skip (PYTHON=, EXTRAS=test, VENV= of its own)
 	$(BIN)/python -m pytest -q

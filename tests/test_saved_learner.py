@@ -18,13 +18,13 @@ from mediated_transfer.run import RunSpec, execute_run
 from mediated_transfer.saved_learner import (DQN_FILE, LINEAR_FILE, SavedLearnerError, load_learner,
                                              save_learner)
 
-from .optional import needs_torch
+from .optional import needs_deep
 from .test_run import TINY
 from .test_sweep import _run_cli
 
 LINEAR = ("linear_q", "rbf", {})
 DQN = ("dqn", "network", {"learning_starts": 100, "buffer_size": 1000})
-LEARNERS = [LINEAR, pytest.param(*DQN, marks=needs_torch)]
+LEARNERS = [LINEAR, DQN]  # DQN skips without the deep extra (conftest.py)
 
 
 def _observations(n: int = 300) -> list[np.ndarray]:
@@ -65,11 +65,11 @@ def test_a_saved_learner_reloads_to_the_same_greedy_actions(tmp_path, algorithm,
         assert np.array_equal(learner.theta, trained["learner"].theta)
 
 
-@needs_torch
+@needs_deep
 def test_the_files_are_plain_arrays_and_tensors_read_without_unpickling(tmp_path):
     import torch
 
-    for algorithm, representation, params in (LINEAR, DQN):
+    for algorithm, representation, params in LEARNERS:
         spec = RunSpec(algorithm=algorithm, representation=representation, algorithm_params=params,
                        **{**TINY, "budget": 300, "eval_points": 1})
         execute_run(spec, on_finish=lambda learner: save_learner(learner, spec, tmp_path / algorithm))
@@ -101,7 +101,7 @@ def _smoke_run(root: Path, cache: Path, *overrides: str) -> Path:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("algorithm, representation", [("linear_q", "fsr"), pytest.param("dqn", "network", marks=needs_torch)])
+@pytest.mark.parametrize("algorithm, representation", [("linear_q", "fsr"), ("dqn", "network")])
 def test_evaluate_and_animate_run_on_a_smoke_runs_folder(tmp_path, source_cache, capsys,
                                                          algorithm, representation):
     folder = _smoke_run(tmp_path, source_cache, f"algorithm={algorithm}",

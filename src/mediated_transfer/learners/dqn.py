@@ -30,7 +30,7 @@ from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
 from .rng_state import restore_rng_state, rng_state_words
 
 # The config and the network's shapes live in dqn_config.py (no torch there); re-exported here.
-from .dqn_config import (KERNELS, MAX_TORCH_THREADS, NUM_BINARY, DQNConfig,  # noqa: F401
+from .dqn_config import (KERNELS, MAX_TORCH_THREADS, NUM_BINARY, TRANSITION_WIDTH, DQNConfig,  # noqa: F401
                          forward_flops, layer_shapes, update_flops)
 
 
@@ -91,7 +91,7 @@ class ReplayBuffer:
     REWARD = OBSERVATION_SIZE + 1
     NEXT_OBSERVATION = slice(OBSERVATION_SIZE + 2, 2 * OBSERVATION_SIZE + 2)
     BOOTSTRAP = 2 * OBSERVATION_SIZE + 2
-    WIDTH = 2 * OBSERVATION_SIZE + 3
+    WIDTH = TRANSITION_WIDTH
 
     def __init__(self, capacity: int, batch_size: int):
         self.capacity, self.size, self.position = capacity, 0, 0

@@ -13,6 +13,8 @@ from dataclasses import asdict, dataclass, fields
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
 
 NUM_BINARY = OBSERVATION_SIZE - NUM_DISTANCES
+TRANSITION_WIDTH = 2 * OBSERVATION_SIZE + 3
+"""Floats in a replay-buffer row: observation, action, reward, next observation, bootstrap flag."""
 KERNELS = ("fast", "reference")
 
 
