@@ -196,15 +196,20 @@ def test_params_leave_out_where_outputs_go_and_how_runs_are_scheduled():
     assert len(params) < len(every) - 10
 
 
-def test_each_experiment_opens_on_its_runs_sorted_by_l_r(settings):
+def test_each_experiment_stores_a_runs_view_with_l_r_and_time_to_threshold_as_columns(settings):
     import json
 
     experiment_id = tracking.prepare(settings, "table_x")
     tags = settings.client().get_experiment(experiment_id).tags
-    assert tags["mlflow.experimentKind"] == "custom_model_development"
     view = json.loads(tags[f"mlflow.sharedViewState.{tracking.RUNS_VIEW}"])
-    assert view["orderByKey"] == "metrics.`reward_loss`" and view["orderByAsc"] is True
     assert {"metrics.`reward_loss`", "metrics.`time_to_threshold`"} <= set(view["selectedColumns"])
+
+
+def test_l_r_is_logged_as_the_ui_shows_it(settings):
+    result = synthetic_result(curve=(2.1, 6.1, 9.1))  # a float sum: 2.1 + ... leaves 1e-15s
+    _log(settings, result)
+    [run] = tracking.find_runs(settings, "table_x")
+    assert run.data.metrics["reward_loss"] == round(result.reward_loss, 9)
 
 
 def test_missing_server_uri_is_a_clear_error():

@@ -12,8 +12,8 @@ A cell's summary run (``log_summary``, made by the reports) carries the same two
 the mean over its runs) and is the parent (``mlflow.parentRunId``) of the cell's runs: it adopts
 them when it is logged, and a run logged once it exists is created under it. So the runs list
 shows one row per table cell, its seeds folded under it. Each experiment stores a view of that
-list (``RUNS_VIEW``: sorted by L_R, with L_R and time to threshold as columns) and is marked a
-machine-learning experiment, so MLflow 3's UI opens it on its runs (``runs_view_links``).
+list with L_R and time to threshold as columns (``RUNS_VIEW``); ``runs_view_links`` gives its
+address (MLflow 3's UI opens an experiment on a GenAI overview instead).
 
 A run being computed is followed live (``LiveRun``): its MLflow run is created when training
 starts, each evaluation point is logged as it is measured, with its wall-clock time, so a long
@@ -51,18 +51,16 @@ KIND_SUMMARY = "cell_summary"
 NEVER = "never"
 PARENT = "mlflow.parentRunId"
 """MLflow's tag of a nested run: its parent's run id."""
-EXPERIMENT_KIND = {"mlflow.experimentKind": "custom_model_development"}
-"""MLflow 3's UI opens a machine-learning experiment on its runs (else on a GenAI overview)."""
 RUNS_VIEW = "l_r"
 """The share key of the runs view stored in each experiment (as the UI's own "Share" stores one)."""
 RUNS_VIEW_STATE = {
-    "orderByKey": "metrics.`reward_loss`",
-    "orderByAsc": True,
     "selectedColumns": ["metrics.`reward_loss`", "metrics.`reward_loss_sem`", "metrics.`time_to_threshold`",
                         "tags.`time_to_threshold`", "metrics.`n_runs`"],
 }
-"""The runs list a reader compares at a glance: lowest L_R first, L_R (a cell's: mean and SEM
-over its ``n_runs``) and time to threshold beside each name."""
+"""The runs list a reader compares at a glance: L_R (a cell's: the mean and SEM over its
+``n_runs``) and time to threshold beside each name. It keeps MLflow's order (newest first), so
+the cells' summaries, logged last, come first with their runs folded under them: sorted by L_R,
+the UI would list the best runs before their cells and show them unfolded."""
 NOT_PARAMS = frozenset({"paths", "tracking", "threads_per_run", "rerun_stale", "save_learner", "report",
                         "lockstep.runs", "scale.seeds", "scale.reports_subdir"})
 """Config keys left out of a run's params: where outputs go and how runs are scheduled, which do
@@ -111,11 +109,11 @@ def prepare(settings: TrackingSettings, experiment: str) -> str:
 
 
 def _ensure_view(client, experiment_id: str, tags: Mapping[str, str]) -> None:
-    """Mark the experiment a machine-learning one and store the runs view (when missing)."""
-    wanted = {**EXPERIMENT_KIND, f"mlflow.sharedViewState.{RUNS_VIEW}": json.dumps(RUNS_VIEW_STATE)}
-    for key, value in wanted.items():
-        if key not in tags or (key.startswith("mlflow.sharedViewState.") and tags[key] != value):
-            client.set_experiment_tag(experiment_id, key, value)
+    """Store the runs view in the experiment, as the UI's "Share" of a view does (if missing or
+    another)."""
+    key, value = f"mlflow.sharedViewState.{RUNS_VIEW}", json.dumps(RUNS_VIEW_STATE)
+    if tags.get(key) != value:
+        client.set_experiment_tag(experiment_id, key, value)
 
 
 @contextlib.contextmanager
@@ -288,7 +286,12 @@ def _result_metrics(result: RunResult, timestamp: int) -> list:
         "first_target_reward_step": result.first_target_reward_step,
         **{f"learner.{k}": v for k, v in result.learner_stats.items()},
     }
-    return [Metric(k, float(v), timestamp, 0) for k, v in scalars.items() if _is_number(v)]
+    return [Metric(k, _rounded(v), timestamp, 0) for k, v in scalars.items() if _is_number(v)]
+
+
+def _rounded(value: Any) -> float:
+    """A scalar as the UI shows it: 18.3, not the 18.299999999999997 a float sum leaves."""
+    return round(float(value), 9)
 
 
 def _result_tags(result: RunResult) -> dict[str, str]:
@@ -354,7 +357,7 @@ def _create_summary(client, experiment_id, key, run_name, summary, tags, artifac
     scalars["reward_loss"] = summary.get("reward_loss_mean")
     if scalars["time_to_threshold"] is None and steps:
         scalars["time_to_threshold"] = steps[-1]
-    metrics += [Metric(k, float(v), 0, 0) for k, v in scalars.items() if _is_number(v, allow_nan=True)]
+    metrics += [Metric(k, _rounded(v), 0, 0) for k, v in scalars.items() if _is_number(v, allow_nan=True)]
     all_tags = {**tags, "kind": KIND_SUMMARY, "fingerprint": fingerprint}
     if summary.get("time_to_threshold") is None:
         all_tags["time_to_threshold"] = NEVER
