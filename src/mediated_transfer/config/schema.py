@@ -27,7 +27,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
 from ..env.config import WorldConfig
-from ..learners.dqn_config import DQNConfig
+from ..learners.dqn import DQNConfig
 from ..learners.fsr import FSRConfig
 from ..learners.linear_q import LinearQConfig
 from ..learners.rbf import RBFConfig

@@ -14,7 +14,7 @@ from ..config.mapping import config_from_mapping
 from ..env.config import WorldConfig
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
 from .base import Learner
-from .dqn_config import TRANSITION_WIDTH, DQNConfig, layer_shapes  # no torch: dqn.py is imported to build one
+from .dqn import DQNConfig, DQNLearner, ReplayBuffer, layer_shapes
 from .fsr import FSRConfig, FSRRepresentation
 from .linear_q import LinearQConfig, LinearQLearner
 from .rbf import RBFConfig, RBFRepresentation
@@ -85,7 +85,7 @@ def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
         params += rest[-1][0] * (rest[-1][1] + 1)
         # float32: the replay buffer and its batch; weights, target weights, gradient and
         # Adam's two moments; the batch's activations (forward and backward).
-        rows = (c.buffer_size + c.batch_size) * TRANSITION_WIDTH
+        rows = (c.buffer_size + c.batch_size) * ReplayBuffer.WIDTH
         activations = 2 * c.batch_size * c.hidden_size * c.num_hidden_layers
         return 4 * (rows + 5 * params + activations)
     if isinstance(rep_config, RBFConfig):
@@ -157,8 +157,6 @@ def make_learner(
         algorithm, representation, algorithm_params, representation_params
     )
     if algorithm == "dqn":
-        from .dqn import DQNLearner
-
         return DQNLearner(algo_config, num_actions=NUM_ACTIONS, seed=seed)
     features = make_features(representation, rep_config)
     if algorithm in SB3_ALGORITHMS:

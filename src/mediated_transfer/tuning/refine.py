@@ -184,7 +184,7 @@ def update_cost(values: dict[str, Any]) -> float:
     """Nominal FLOPs of gradient updates per learning step of a DQN candidate: the part of a
     run's cost the candidates change (batch size, train frequency; the environment's share is
     the same for all). A train-frequency-1, batch-128 candidate does 16 times the defaults' update work."""
-    from ..learners.dqn_config import DQNConfig, update_flops
+    from ..learners.dqn import DQNConfig, update_flops
 
     config = DQNConfig(**{k.split(".", 1)[1]: v for k, v in values.items() if k.startswith("algorithm.")})
     return update_flops(config) / config.train_frequency
