@@ -1,26 +1,51 @@
 # mediated-transfer: `make help` lists the targets.
-PYTHON ?= python3
-VENV   := .venv
-BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed-test
+# PYTHON selects the interpreter (3.11, 3.12 or 3.13); EXTRAS what `make install` adds to the
+# package: deep (torch and Stable-Baselines3: the DQN and SB3 learners) and test. `make test`
+# always installs everything. Versions come from constraints.txt, the ones that produced the
+# committed results (docs/install.md).
+PYTHON      ?= python3
+VENV        ?= .venv
+EXTRAS      ?= deep,test
+TORCH_INDEX ?=
+SUPPORTED   := 3.11 3.12 3.13
+SUPPORTED_TEXT := 3.11, 3.12 or 3.13
+BIN         := $(VENV)/bin
+
+comma := ,
+# The interpreter's version, read once per make (empty when PYTHON cannot run).
+PYVER := $(shell $(PYTHON) -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null)
+# One stamp per Python version and set of extras: another PYTHON or EXTRAS installs again.
+STAMP      := $(VENV)/.installed-py$(PYVER)-$(subst $(comma),+,$(EXTRAS))
+FULL_STAMP := $(VENV)/.installed-py$(PYVER)-deep+test
 
 .DEFAULT_GOAL := help
-.PHONY: help install test bench
+.PHONY: help check-python install test test-no-torch bench
 
 help: ## List the targets
 	@grep -E '^[a-zA-Z0-9_-]+:.*?## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*?## "}; {printf "  %-18s %s\n", $$1, $$2}'
 
-$(STAMP): pyproject.toml
+check-python: ## Stop at once unless PYTHON is a supported version (3.11, 3.12, 3.13)
+	@case " $(SUPPORTED) " in \
+		*" $(PYVER) "*) ;; \
+		*) echo "mediated-transfer needs Python $(SUPPORTED_TEXT); $(PYTHON) is $(if $(PYVER),Python $(PYVER),not an interpreter that runs here); choose one with PYTHON=, e.g. make install PYTHON=python3.12" >&2; exit 1;; \
+	esac
+
+# Nothing is downloaded before the check. A $(VENV) of another Python version is made anew.
+$(VENV)/.installed-py$(PYVER)-%: pyproject.toml constraints.txt | check-python
+	@if [ -x $(BIN)/python ] && [ "$$($(BIN)/python -c 'import sys; print("%d.%d" % sys.version_info[:2])')" != "$(PYVER)" ]; then \
+		echo "$(VENV) holds another Python version: making it anew for Python $(PYVER)"; rm -rf $(VENV); fi
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	# torch first and pinned: 2.13.0 is a local CPU wheel; anything else downloads CUDA.
-	$(BIN)/pip install --quiet torch==2.13.0
-	$(BIN)/pip install --quiet -e '.[test]' torch==2.13.0
+	$(if $(TORCH_INDEX),$(BIN)/pip install --quiet --no-deps -c constraints.txt torch --index-url $(TORCH_INDEX))
+	$(BIN)/pip install --quiet -c constraints.txt -e '.[$(subst +,$(comma),$*)]'
 	touch $@
 
-install: $(STAMP) ## Create .venv and install the project with its test extras
+install: $(STAMP) ## Create .venv and install the project (EXTRAS=deep,test; EXTRAS=test: no torch)
 
-test: $(STAMP) ## Run the test suite (creates the environment first)
+test: $(FULL_STAMP) ## Run the whole test suite (creates .venv with everything first)
+	REQUIRE_DEEP=1 $(BIN)/python -m pytest -q
+
+test-no-torch: $(STAMP) ## The suite without torch: its tests skip (PYTHON=, EXTRAS=test, VENV= of its own)
 	$(BIN)/python -m pytest -q
 
 bench: $(STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3

@@ -10,6 +10,8 @@ from mediated_transfer.reporting.ablation import (EXPERIMENT, decidable, decide,
                                                   seed_clustering_p, table_i_values)
 from mediated_transfer.results import RunResult
 
+from .optional import needs_deep
+
 STEPS = [100, 200, 300, 400]
 LEARNS, NEVER = [0.0, 9.0, 9.5, 9.8], [0.0, 0.2, 0.0, 0.1]
 
@@ -98,6 +100,7 @@ def test_without_table_i_runs_the_report_says_how_to_start_and_draws_nothing(tmp
     assert not (tmp_path / "ablation.png").exists()
 
 
+@needs_deep
 def test_the_registered_sweep_runs_every_arm_in_its_own_folder_and_reports_it(tmp_path):
     """The experiment as registered, at smoke scale on one seed: four arms, each in its own folder,
     and a report with a row per arm."""

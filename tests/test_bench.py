@@ -4,6 +4,8 @@ import pytest
 
 from mediated_transfer.bench import projection
 
+from .optional import needs_deep
+
 
 def test_each_table_has_its_eleven_rows_and_twenty_seeds():
     for table in projection.TABLES:
@@ -49,6 +51,7 @@ def test_the_steady_rate_skips_the_warm_up_and_the_final_evaluation():
     assert projection.steady_rate({200: 1.0}, warm_up=0, budget=200) is None
 
 
+@needs_deep
 def test_the_dqn_probe_starts_timing_after_its_warm_up():
     from mediated_transfer.config.compose import compose_config
     from mediated_transfer.config.spec import run_spec

@@ -11,6 +11,7 @@ import pytest
 from mediated_transfer.results import RunResult
 from mediated_transfer.run import RunSpec, execute_run
 
+from .optional import needs_deep
 from .test_sweep import _common, _results, _run_cli, _settings, root, source_cache  # noqa: F401
 
 
@@ -36,6 +37,7 @@ def test_linear_q_with_an_absurd_learning_rate_fails_with_its_reason(tmp_path):
     assert back.failed and math.isnan(back.reward_loss)
 
 
+@needs_deep
 def test_the_dqn_with_an_absurd_learning_rate_fails_with_its_reason():
     spec = RunSpec(algorithm="dqn", representation="network", budget=1200, eval_points=3, eval_episodes=2,
                    algorithm_params={"learning_rate": 1e6, "learning_starts": 100, "buffer_size": 1000,

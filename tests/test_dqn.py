@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import torch
-import torch.nn.functional as F
+
+from .optional import importorskip
+
+torch = importorskip("torch")
+import torch.nn.functional as F  # noqa: E402
 
 from mediated_transfer.learners.base import Learner
 from mediated_transfer.learners.dqn import DQNConfig, DQNLearner, QNetwork

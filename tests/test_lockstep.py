@@ -10,7 +10,10 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-import torch
+
+from .optional import importorskip
+
+torch = importorskip("torch")
 
 from mediated_transfer.learners.dqn import DQNConfig, DQNLearner
 from mediated_transfer.lockstep.group import PerSeedLearners

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from .optional import needs_deep
+
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
 DOCS = sorted((ROOT / "docs").glob("*.md"))
@@ -24,6 +26,8 @@ def _blocks(page: Path) -> list[str]:
 
 
 BLOCKS = [(page, code) for page in PAGES for code in _blocks(page)]
+# An example that trains with torch or Stable-Baselines3 needs the deep extra.
+DEEP_CODE = re.compile(r"^(import torch|from stable_baselines3)", re.M)
 
 
 def test_docs_have_python_examples():
@@ -34,7 +38,7 @@ def test_docs_have_python_examples():
 
 @pytest.mark.parametrize(
     "page, code",
-    BLOCKS,
+    [pytest.param(page, code, marks=needs_deep) if DEEP_CODE.search(code) else (page, code) for page, code in BLOCKS],
     ids=[f"{page.relative_to(ROOT)}:block{i}" for i, (page, _) in enumerate(BLOCKS)],
 )
 def test_docs_python_example_runs(page, code):

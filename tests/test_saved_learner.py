@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import torch
 from PIL import Image
 
 from mediated_transfer import evaluate as evaluate_cli
@@ -19,10 +18,13 @@ from mediated_transfer.run import RunSpec, execute_run
 from mediated_transfer.saved_learner import (DQN_FILE, LINEAR_FILE, SavedLearnerError, load_learner,
                                              save_learner)
 
+from .optional import needs_deep
 from .test_run import TINY
 from .test_sweep import _run_cli
 
-LEARNERS = [("linear_q", "rbf", {}), ("dqn", "network", {"learning_starts": 100, "buffer_size": 1000})]
+LINEAR = ("linear_q", "rbf", {})
+DQN = ("dqn", "network", {"learning_starts": 100, "buffer_size": 1000})
+LEARNERS = [LINEAR, DQN]  # DQN skips without the deep extra (conftest.py)
 
 
 def _observations(n: int = 300) -> list[np.ndarray]:
@@ -56,12 +58,17 @@ def test_a_saved_learner_reloads_to_the_same_greedy_actions(tmp_path, algorithm,
     assert [learner.act(obs, explore=False) for obs in observations] == actions
     assert len(set(actions)) > 1  # a learner that has learned something
     if algorithm == "dqn":
+        import torch
+
         assert torch.equal(learner.network.flat, trained["learner"].network.flat)
     else:
         assert np.array_equal(learner.theta, trained["learner"].theta)
 
 
+@needs_deep
 def test_the_files_are_plain_arrays_and_tensors_read_without_unpickling(tmp_path):
+    import torch
+
     for algorithm, representation, params in LEARNERS:
         spec = RunSpec(algorithm=algorithm, representation=representation, algorithm_params=params,
                        **{**TINY, "budget": 300, "eval_points": 1})

@@ -6,7 +6,11 @@ from __future__ import annotations
 import math
 import numpy as np
 import pytest
-import torch
+
+from .optional import importorskip
+
+torch = importorskip("torch")
+importorskip("stable_baselines3")
 
 from mediated_transfer import run_sb3
 from mediated_transfer.config.compose import ConfigError, compose_config

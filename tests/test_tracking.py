@@ -78,11 +78,13 @@ def test_a_run_logs_config_curve_metrics_and_tags(settings, tmp_path):
     assert [a.path for a in settings.client().list_artifacts(run_id)] == ["curve.csv"]
 
 
-def test_never_reaching_the_threshold_is_a_tag_not_a_number(settings):
-    _log(settings, synthetic_result(curve=(1.0, 2.0, 3.0)))
-    [run] = tracking.find_runs(settings, "table_x")
-    assert "time_to_threshold" not in run.data.metrics
-    assert run.data.tags["time_to_threshold"] == tracking.NEVER
+def test_never_reaching_the_threshold_logs_the_budget_for_a_sort_and_a_tag_that_says_never(settings):
+    _log(settings, synthetic_result(curve=(1.0, 2.0, 3.0)))  # never reaches 8
+    _log(settings, synthetic_result(seed=1, curve=(2.0, 9.0, 9.0)), key="multirun/t/quick/regular_15/seed=1@abc")
+    runs = {r.data.tags.get("time_to_threshold", "reached"): r for r in tracking.find_runs(settings, "table_x")}
+    assert runs[tracking.NEVER].data.metrics["time_to_threshold"] == 300  # the budget
+    assert runs["reached"].data.metrics["time_to_threshold"] == 200
+    assert runs[tracking.NEVER].data.metrics["reward_loss"] > runs["reached"].data.metrics["reward_loss"]
 
 
 def test_logging_the_same_run_again_does_not_duplicate_it(settings):
@@ -127,6 +129,90 @@ def test_summary_of_a_single_run_logs_its_undefined_sem_as_nan(settings):
     [run] = tracking.find_runs(settings, "table_x")
     assert math.isnan(run.data.metrics["reward_loss_sem"])
     assert run.data.metrics["n_runs"] == 1
+
+
+# --- a cell's summary is the parent of its runs ------------------------------------------------
+CELL = {"table": "table_x", "cell": "regular_15", "sweep": "table_x/quick", "variant": "baseline"}
+
+
+def _cell_run(settings, seed, variant="baseline"):
+    where = "" if variant == "baseline" else f"/{variant}"
+    return tracking.log_run(settings, "table_x", key=f"multirun/t/quick/regular_15/seed={seed}{where}@abc",
+                            run_name=f"regular_15/seed={seed}", result=synthetic_result(seed=seed), params={},
+                            tags={**CELL, "seed": str(seed), "variant": variant})
+
+
+def _cell_summary(settings, fingerprint, curves=((2.0, 9.0), (4.0, 9.0))):
+    from mediated_transfer.metrics import summarise_runs
+
+    return tracking.log_summary(settings, "table_x", key="summary/table_x/quick/regular_15",
+                                run_name="regular_15 (summary, baseline)", tags=CELL, fingerprint=fingerprint,
+                                summary=summarise_runs([list(c) for c in curves], [100, 200]))
+
+
+def _parent(settings, run_id):
+    return settings.client().get_run(run_id).data.tags.get(tracking.PARENT)
+
+
+def test_a_cells_summary_is_the_parent_of_its_runs_and_of_those_logged_after_it(settings):
+    before = [_cell_run(settings, seed) for seed in (0, 1)]
+    variant = _cell_run(settings, 0, variant="algorithm.lambda_=0.5")
+    summary = _cell_summary(settings, "a")
+    assert [_parent(settings, r) for r in before] == [summary, summary]
+    assert _parent(settings, variant) is None  # a variant's runs belong to the variant's cell
+    assert _parent(settings, _cell_run(settings, 2)) == summary
+    live = tracking.LiveRun(settings, "table_x", key="multirun/t/quick/regular_15/seed=3@abc",
+                            run_name="regular_15/seed=3", params={}, tags={**CELL, "seed": "3"})
+    assert _parent(settings, live.run_id) == summary
+
+
+def test_a_replaced_summary_hands_its_runs_to_the_new_one(settings):
+    runs = [_cell_run(settings, seed) for seed in (0, 1)]
+    old = _cell_summary(settings, "a")
+    new = _cell_summary(settings, "b")
+    assert new != old and settings.client().get_run(old).info.lifecycle_stage == "deleted"
+    assert [_parent(settings, r) for r in runs] == [new, new]
+
+
+def test_a_summary_shares_its_runs_columns_l_r_and_time_to_threshold(settings):
+    _cell_summary(settings, "a")
+    [reached] = tracking.find_runs(settings, "table_x")
+    assert reached.data.metrics["reward_loss"] == reached.data.metrics["reward_loss_mean"]
+    assert reached.data.metrics["time_to_threshold"] == 200 and "time_to_threshold" not in reached.data.tags
+    _cell_summary(settings, "b", curves=((1.0, 2.0), (1.0, 3.0)))  # the mean curve never reaches 8
+    [never] = tracking.find_runs(settings, "table_x")
+    assert never.data.metrics["time_to_threshold"] == 200 and never.data.tags["time_to_threshold"] == tracking.NEVER
+
+
+def test_params_leave_out_where_outputs_go_and_how_runs_are_scheduled():
+    from omegaconf import OmegaConf
+
+    from mediated_transfer.config.compose import compose_config
+
+    config = OmegaConf.to_container(compose_config(["experiment=table2_rbf", "cell=regular_15"]), resolve=True)
+    params = tracking.flatten(config)
+    assert {"seed", "cell", "algorithm.lambda_", "representation.name", "scale.budget", "env.goal_radius"} <= set(params)
+    assert not any(k.split(".")[0] in {"paths", "tracking"} for k in params)
+    every = tracking.flatten(config, leave_out=frozenset())
+    # Every key left out is one the config has (or a group of them).
+    assert all(any(k == out or k.startswith(f"{out}.") for k in every) for out in tracking.NOT_PARAMS)
+    assert len(params) < len(every) - 10
+
+
+def test_each_experiment_stores_a_runs_view_with_l_r_and_time_to_threshold_as_columns(settings):
+    import json
+
+    experiment_id = tracking.prepare(settings, "table_x")
+    tags = settings.client().get_experiment(experiment_id).tags
+    view = json.loads(tags[f"mlflow.sharedViewState.{tracking.RUNS_VIEW}"])
+    assert {"metrics.`reward_loss`", "metrics.`time_to_threshold`"} <= set(view["selectedColumns"])
+
+
+def test_l_r_is_logged_as_the_ui_shows_it(settings):
+    result = synthetic_result(curve=(2.1, 6.1, 9.1))  # a float sum: 2.1 + ... leaves 1e-15s
+    _log(settings, result)
+    [run] = tracking.find_runs(settings, "table_x")
+    assert run.data.metrics["reward_loss"] == round(result.reward_loss, 9)
 
 
 def test_missing_server_uri_is_a_clear_error():
@@ -203,7 +289,7 @@ def test_a_live_run_that_stops_early_is_not_left_running(settings, status):
 def test_the_ui_links_open_each_experiments_runs(settings):
     experiment_id = tracking.prepare(settings, "table_y")
     assert tracking.runs_view_links(settings, "http://127.0.0.1:5000/") == [
-        f"table_y: http://127.0.0.1:5000/#/experiments/{experiment_id}/runs"]
+        f"table_y: http://127.0.0.1:5000/#/experiments/{experiment_id}/runs?viewStateShareKey={tracking.RUNS_VIEW}"]
 
 
 def _prepare(args):

@@ -23,9 +23,20 @@ from dataclasses import asdict, dataclass, fields
 from typing import Any
 
 import numpy as np
-import torch
-import torch.nn.functional as F
-from torch import nn
+
+try:
+    import torch
+    import torch.nn.functional as F
+    from torch import nn
+except ModuleNotFoundError:  # no deep extra: the config and the shapes import, a DQN cannot be built
+    class _NoTorch:
+        Module = object  # torch.nn.Module, so that the classes below can be defined
+
+        def __getattr__(self, name: str) -> Any:
+            raise ModuleNotFoundError("algorithm=dqn needs torch: pip install 'mediated-transfer[deep]' "
+                                      "(make install does; docs/install.md)")
+
+    torch = F = nn = _NoTorch()  # type: ignore[assignment]
 
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
 from .rng_state import restore_rng_state, rng_state_words

@@ -1,11 +1,19 @@
 """MLflow tracking: one MLflow experiment per table, one MLflow run per learning run, and one
-summary run per table cell.
+summary run per table cell, the parent of its seeds' runs.
 
-A learning run's MLflow run holds the resolved config as params, the evaluation curve as the
-metric series ``mean_reward`` and ``success_rate`` (step = learning step), ``reward_loss`` and
-``time_to_threshold`` as metrics, and tags naming its table, cell, sweep, scale and seed.
-A run that never reaches the threshold has no ``time_to_threshold`` metric and the tag
-``time_to_threshold=never`` (a number would have to pretend a step).
+A learning run's MLflow run holds the resolved config as params (less what does not change what
+a run computes: ``NOT_PARAMS``), the evaluation curve as the metric series ``mean_reward`` and
+``success_rate`` (step = learning step), ``reward_loss`` (L_R) and ``time_to_threshold`` as
+metrics, and tags naming its table, cell, sweep, scale and seed. A run that never reaches the
+threshold has ``time_to_threshold`` = its budget, so that a sort puts it after every run that
+reaches it, and the tag ``time_to_threshold=never`` says which it is.
+
+A cell's summary run (``log_summary``, made by the reports) carries the same two metrics (L_R:
+the mean over its runs) and is the parent (``mlflow.parentRunId``) of the cell's runs: it adopts
+them when it is logged, and a run logged once it exists is created under it. So the runs list
+shows one row per table cell, its seeds folded under it. Each experiment stores a view of that
+list with L_R and time to threshold as columns (``RUNS_VIEW``); ``runs_view_links`` gives its
+address (MLflow 3's UI opens an experiment on a GenAI overview instead).
 
 A run being computed is followed live (``LiveRun``): its MLflow run is created when training
 starts, each evaluation point is logged as it is measured, with its wall-clock time, so a long
@@ -26,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import fcntl
 import hashlib
+import json
 import math
 import os
 import time
@@ -40,6 +49,22 @@ from ..results import RunResult
 KIND_RUN = "run"
 KIND_SUMMARY = "cell_summary"
 NEVER = "never"
+PARENT = "mlflow.parentRunId"
+"""MLflow's tag of a nested run: its parent's run id."""
+RUNS_VIEW = "l_r"
+"""The share key of the runs view stored in each experiment (as the UI's own "Share" stores one)."""
+RUNS_VIEW_STATE = {
+    "selectedColumns": ["metrics.`reward_loss`", "metrics.`reward_loss_sem`", "metrics.`time_to_threshold`",
+                        "tags.`time_to_threshold`", "metrics.`n_runs`"],
+}
+"""The runs list a reader compares at a glance: L_R (a cell's: the mean and SEM over its
+``n_runs``) and time to threshold beside each name. It keeps MLflow's order (newest first), so
+the cells' summaries, logged last, come first with their runs folded under them: sorted by L_R,
+the UI would list the best runs before their cells and show them unfolded."""
+NOT_PARAMS = frozenset({"paths", "tracking", "threads_per_run", "rerun_stale", "save_learner", "report",
+                        "lockstep.runs", "scale.seeds", "scale.reports_subdir"})
+"""Config keys left out of a run's params: where outputs go and how runs are scheduled, which do
+not change what a run computes (as conf/config.yaml leaves them out of a variant's name)."""
 _MAX_PARAM_LENGTH = 6000  # MLflow's limit on a param value
 _BATCH = {"metrics": 1000, "params": 100, "tags": 100}  # MLflow's limits per log_batch call
 
@@ -78,7 +103,17 @@ def prepare(settings: TrackingSettings, experiment: str) -> str:
     otherwise both create its tables, and one would fail."""
     with _store_lock(settings), _impatient():
         client = settings.client()
-        return _experiment_id(client, settings, experiment)
+        experiment_id = _experiment_id(client, settings, experiment)
+        _ensure_view(client, experiment_id, client.get_experiment(experiment_id).tags)
+        return experiment_id
+
+
+def _ensure_view(client, experiment_id: str, tags: Mapping[str, str]) -> None:
+    """Store the runs view in the experiment, as the UI's "Share" of a view does (if missing or
+    another)."""
+    key, value = f"mlflow.sharedViewState.{RUNS_VIEW}", json.dumps(RUNS_VIEW_STATE)
+    if tags.get(key) != value:
+        client.set_experiment_tag(experiment_id, key, value)
 
 
 @contextlib.contextmanager
@@ -125,7 +160,9 @@ def _experiment_id(client, settings: TrackingSettings, name: str) -> str:
         # One folder per experiment (table), as MLflow's own file layout has it.
         location = (Path(settings.artifact_location).resolve() / name).as_uri()
     try:
-        return client.create_experiment(name, artifact_location=location)
+        experiment_id = client.create_experiment(name, artifact_location=location)
+        _ensure_view(client, experiment_id, {})
+        return experiment_id
     except MlflowException:
         # Created meanwhile by another process.
         found = client.get_experiment_by_name(name)
@@ -157,6 +194,9 @@ def log_run(
     metrics += [Metric("success_rate", float(p), 0, int(s)) for s, p in zip(result.steps, result.success_rate)]
     metrics += _result_metrics(result, timestamp=0)
     all_tags = {**tags, **_result_tags(result)}
+    parent = _cell_summary(client, experiment_id, tags)
+    if parent is not None:
+        all_tags[PARENT] = parent
     return _create(client, experiment_id, key, run_name, metrics, params, all_tags, artifacts)
 
 
@@ -179,8 +219,9 @@ class LiveRun:
         self.run_id: str | None = None
         if _existing(client, experiment_id, key) is not None:
             return
+        parent = _cell_summary(client, experiment_id, tags)
         tags = {**{k: str(v) for k, v in tags.items()}, "kind": KIND_RUN, "run_key": key,
-                "run_key_hash": key_hash(key)}
+                "run_key_hash": key_hash(key), **({PARENT: parent} if parent else {})}
         self.run_id = client.create_run(experiment_id, run_name=run_name, tags=tags).info.run_id
         params_list = [Param(k, v) for k, v in params.items()]
         for i in range(0, len(params_list), _BATCH["params"]):
@@ -235,7 +276,8 @@ def _result_metrics(result: RunResult, timestamp: int) -> list:
 
     scalars = {
         "reward_loss": result.reward_loss,
-        "time_to_threshold": result.time_to_threshold,
+        # Never reached: the budget (and the tag time_to_threshold=never), so a sort can use it.
+        "time_to_threshold": result.budget if result.time_to_threshold is None else result.time_to_threshold,
         "final_reward": result.mean_reward[-1] if result.mean_reward else None,
         "learning_steps_per_s": result.learning_steps_per_s,
         "wall_time_s": result.wall_time_s,
@@ -244,7 +286,12 @@ def _result_metrics(result: RunResult, timestamp: int) -> list:
         "first_target_reward_step": result.first_target_reward_step,
         **{f"learner.{k}": v for k, v in result.learner_stats.items()},
     }
-    return [Metric(k, float(v), timestamp, 0) for k, v in scalars.items() if _is_number(v)]
+    return [Metric(k, _rounded(v), timestamp, 0) for k, v in scalars.items() if _is_number(v)]
+
+
+def _rounded(value: Any) -> float:
+    """A scalar as the UI shows it: 18.3, not the 18.299999999999997 a float sum leaves."""
+    return round(float(value), 9)
 
 
 def _result_tags(result: RunResult) -> dict[str, str]:
@@ -273,44 +320,85 @@ def log_summary(
     artifacts: Iterable[Path] = (),
     fingerprint: str = "",
 ) -> str:
-    """Log the summary run of a table cell (output of metrics.summarise_runs).
+    """Log the summary run of a table cell (output of metrics.summarise_runs), the parent of the
+    cell's runs (same ``sweep``, ``cell`` and ``variant`` tags).
 
     Its key identifies the cell of a sweep. An existing summary with the same ``fingerprint``
     (the data it summarises) is kept; one with another fingerprint is replaced, so a report
-    rebuilt after more runs finished updates the summary instead of adding a second one.
+    rebuilt after more runs finished updates the summary instead of adding a second one. Either
+    way the cell's runs are its children afterwards (those of a replaced summary move over
+    before it is deleted).
     """
-    from mlflow.entities import Metric
-
     client = settings.client()
     experiment_id = _experiment_id(client, settings, experiment)
-    for run in _runs_with_key(client, experiment_id, key):
-        if run.info.status == "FINISHED" and run.data.tags.get("fingerprint") == fingerprint:
-            return run.info.run_id
-        client.delete_run(run.info.run_id)
+    existing = _runs_with_key(client, experiment_id, key)
+    kept = next((run.info.run_id for run in existing if run.info.status == "FINISHED"
+                 and run.data.tags.get("fingerprint") == fingerprint), None)
+    if kept is None:
+        kept = _create_summary(client, experiment_id, key, run_name, summary, tags, artifacts, fingerprint)
+    _adopt(client, experiment_id, kept, tags)
+    for run in existing:
+        if run.info.run_id != kept:
+            client.delete_run(run.info.run_id)
+    return kept
+
+
+def _create_summary(client, experiment_id, key, run_name, summary, tags, artifacts, fingerprint) -> str:
+    from mlflow.entities import Metric
+
     steps = [int(s) for s in summary["steps"]]
     metrics = [Metric("mean_reward", float(r), 0, s) for s, r in zip(steps, summary["mean_curve"])]
     metrics += [Metric("mean_reward_sem", float(e), 0, s) for s, e in zip(steps, summary["sem_curve"])]
     scalars = {k: summary.get(k) for k in (
         "n_runs", "reward_loss_mean", "reward_loss_sem", "final_reward_mean", "final_reward_sem",
         "time_to_threshold", "time_to_threshold_median", "runs_reaching_threshold")}
-    metrics += [Metric(k, float(v), 0, 0) for k, v in scalars.items() if _is_number(v, allow_nan=True)]
+    # The columns a cell shares with its runs: L_R (here the mean over the runs) and the time
+    # to threshold (of the mean curve; never reached: the last step, and the tag).
+    scalars["reward_loss"] = summary.get("reward_loss_mean")
+    if scalars["time_to_threshold"] is None and steps:
+        scalars["time_to_threshold"] = steps[-1]
+    metrics += [Metric(k, _rounded(v), 0, 0) for k, v in scalars.items() if _is_number(v, allow_nan=True)]
     all_tags = {**tags, "kind": KIND_SUMMARY, "fingerprint": fingerprint}
     if summary.get("time_to_threshold") is None:
         all_tags["time_to_threshold"] = NEVER
     return _create(client, experiment_id, key, run_name, metrics, {}, all_tags, artifacts)
 
 
-def find_runs(settings: TrackingSettings, experiment: str, filter_string: str = "") -> list:
-    """Active MLflow runs of ``experiment`` matching ``filter_string`` (MLflow's search syntax)."""
+def _cell_filter(tags: Mapping[str, str], kind: str) -> str | None:
+    """Search filter for the runs of ``kind`` in the table cell that ``tags`` name (sweep and
+    cell); None when they name none, or hold a quote (which a filter cannot)."""
+    sweep, cell = tags.get("sweep"), tags.get("cell")
+    if not sweep or not cell or "'" in f"{sweep}{cell}":
+        return None
+    return f"tags.kind = '{kind}' and tags.sweep = '{sweep}' and tags.cell = '{cell}'"
+
+
+def _cell_summary(client, experiment_id: str, tags: Mapping[str, str]) -> str | None:
+    """The run id of the summary of the table cell a run's ``tags`` name, if it has one."""
+    where = _cell_filter(tags, KIND_SUMMARY)
+    if where is None:
+        return None
+    found = [r for r in _search(client, experiment_id, where)
+             if r.data.tags.get("variant") == tags.get("variant") and r.info.status == "FINISHED"]
+    return found[0].info.run_id if found else None
+
+
+def _adopt(client, experiment_id: str, parent_id: str, tags: Mapping[str, str]) -> None:
+    """Make the summary ``parent_id`` the parent of every run of its table cell."""
+    where = _cell_filter(tags, KIND_RUN)
+    if where is None:
+        return
+    for run in _search(client, experiment_id, where):
+        if run.data.tags.get("variant") == tags.get("variant") and run.data.tags.get(PARENT) != parent_id:
+            client.set_tag(run.info.run_id, PARENT, parent_id)
+
+
+def _search(client, experiment_id: str, filter_string: str) -> list:
     from mlflow.entities import ViewType
 
-    client = settings.client()
-    found = client.get_experiment_by_name(experiment)
-    if found is None:
-        return []
     runs, token = [], None
     while True:
-        page = client.search_runs([found.experiment_id], filter_string, ViewType.ACTIVE_ONLY,
+        page = client.search_runs([experiment_id], filter_string, ViewType.ACTIVE_ONLY,
                                   max_results=1000, page_token=token)
         runs += list(page)
         token = page.token
@@ -318,13 +406,23 @@ def find_runs(settings: TrackingSettings, experiment: str, filter_string: str = 
             return runs
 
 
-def flatten(config: Mapping[str, Any], prefix: str = "") -> dict[str, str]:
-    """Nested config -> {"algorithm.lambda_": "0.9", ...}: MLflow params are flat strings."""
+def find_runs(settings: TrackingSettings, experiment: str, filter_string: str = "") -> list:
+    """Active MLflow runs of ``experiment`` matching ``filter_string`` (MLflow's search syntax)."""
+    client = settings.client()
+    found = client.get_experiment_by_name(experiment)
+    return [] if found is None else _search(client, found.experiment_id, filter_string)
+
+
+def flatten(config: Mapping[str, Any], prefix: str = "", leave_out: frozenset[str] = NOT_PARAMS) -> dict[str, str]:
+    """Nested config -> {"algorithm.lambda_": "0.9", ...}: MLflow params are flat strings. The
+    dotted keys in ``leave_out`` (and what is under them) are left out."""
     flat: dict[str, str] = {}
     for key, value in config.items():
         name = f"{prefix}{key}"
+        if name in leave_out:
+            continue
         if isinstance(value, Mapping):
-            flat.update(flatten(value, f"{name}."))
+            flat.update(flatten(value, f"{name}.", leave_out))
         else:
             flat[name] = str(value)[:_MAX_PARAM_LENGTH]
     return flat
@@ -399,10 +497,16 @@ def _is_number(value: Any, allow_nan: bool = False) -> bool:
 
 
 def runs_view_links(settings: TrackingSettings, ui: str) -> list[str]:
-    """``<experiment>: <url>`` of each experiment's table of training runs in the UI at ``ui``.
-    MLflow 3's UI opens an experiment on its GenAI overview; this address opens the runs."""
-    return [f"{e.name}: {ui.rstrip('/')}/#/experiments/{e.experiment_id}/runs"
-            for e in settings.client().search_experiments() if e.name != "Default"]
+    """``<experiment>: <url>`` of each experiment's runs list in the UI at ``ui``, in the stored
+    view (``RUNS_VIEW``), which this stores first in experiments made before it existed."""
+    client = settings.client()
+    links = []
+    for e in client.search_experiments():
+        if e.name != "Default":
+            _ensure_view(client, e.experiment_id, e.tags)
+            links.append(f"{e.name}: {ui.rstrip('/')}/#/experiments/{e.experiment_id}/runs"
+                         f"?viewStateShareKey={RUNS_VIEW}")
+    return links
 
 
 if __name__ == "__main__":  # `make mlflow-ui` prints where the runs are before serving them
