@@ -152,8 +152,8 @@ class MediatedSlurmLauncher(SlurmLauncher):
 
     def _settle(self, finished: list, sweep_dir: Path) -> list[str]:
         """Finished runs are read back and logged to MLflow if missing, here, exactly as their
-        job would (app.run_job skips them); their progress lines are left out."""
-        from mediated_transfer.app import run_job
+        job would (sweep.job.run_job skips them); their progress lines are left out."""
+        from mediated_transfer.sweep.job import run_job
 
         failed = []
         quiet = logging.getLogger("mediated_transfer")

@@ -1,6 +1,6 @@
 """How the launchers hand lockstep groups to a process: which jobs of a sweep go together, and
 one group's jobs run as Hydra jobs (each its folder, .hydra/ record and log) whose runs are
-computed together (app.run_jobs).
+computed together (sweep.job.run_jobs).
 
 Jobs go together when they differ only in their seed (one table cell of one configuration);
 finished runs are left out of the groups (their jobs only skip), so a resumed sweep groups the
@@ -56,7 +56,7 @@ def run_group(jobs: Sequence[tuple[DictConfig, Any]]) -> list[JobReturn]:
     launcher builds them for ``hydra.core.utils.run_job``. Each job is set up by Hydra (folder,
     .hydra/, logging); their runs are then computed together. A failure fails the group's
     unfinished jobs, each with the error."""
-    from ..app import run_jobs
+    from ..sweep.job import run_jobs
 
     returns, prepared = [], []
     for sweep_config, hydra_context in jobs:
@@ -78,7 +78,7 @@ def run_group(jobs: Sequence[tuple[DictConfig, Any]]) -> list[JobReturn]:
 
 
 def _job_of(cfg: DictConfig) -> tuple:
-    """The task function of a grouped job: what app.run_job needs, from Hydra's job context
+    """The task function of a grouped job: what sweep.job.run_job needs, from Hydra's job context
     (the run itself is computed with its group)."""
     hydra_cfg = HydraConfig.get()
     return cfg, hydra_cfg.runtime.output_dir, hydra_cfg.sweep.dir, str(hydra_cfg.job.override_dirname)

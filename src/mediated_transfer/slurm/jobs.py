@@ -1,6 +1,6 @@
 """Which runs of a sweep need a SLURM job, and how they are packed into jobs.
 
-A finished run would only start Python on a node to skip itself (app.run_job), so it is settled
+A finished run would only start Python on a node to skip itself (sweep.job.run_job), so it is settled
 in the launching process instead; the runs left are packed ``runs_per_job`` to a job, in sweep
 order (the seeds of a cell are adjacent), because starting Python costs a job ~8 s.
 """
@@ -29,7 +29,7 @@ class PlannedRun:
 
 
 def is_finished(folder: Path, rerun_stale: bool) -> bool:
-    """True when app.run_job would skip the run in ``folder``: a result is there, and it is not a
+    """True when sweep.job.run_job would skip the run in ``folder``: a result is there, and it is not a
     stale one that ``rerun_stale`` asks to recompute."""
     if not RunResult.exists(folder):
         return False

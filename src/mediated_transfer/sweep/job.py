@@ -1,0 +1,254 @@
+"""One job of a command: reuse or compute a learning run, write its result, log it to MLflow,
+print its progress line (the entry point, app.py, and the launchers call it).
+
+Each job runs its learning run unless its folder already holds the result, writes the result
+there, logs it to MLflow and prints a progress line. Folders are deterministic (conf/config.yaml:
+hydra.run.dir / hydra.sweep.subdir), so running an interrupted sweep again skips every finished
+run and computes only the rest.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import signal
+import sys
+import threading
+from collections.abc import Sequence
+from pathlib import Path
+
+from omegaconf import DictConfig, OmegaConf
+
+from ..config.compose import first_line
+from ..config.spec import check_same_run, run_spec
+from ..results import RunResult
+from . import progress, tracking
+from .claim import claimed
+from .identity import run_name, run_tags
+from .orphan import launcher_watch
+
+log = logging.getLogger("mediated_transfer")
+
+def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.PathLike | None = None,
+            variant: str = "") -> dict:
+    """Run (or skip) the learning run of ``cfg`` in ``folder``, log it, print a progress line.
+
+    ``sweep_dir``: the sweep's folder when part of a sweep (for the overall count and the time
+    left), None for a single run. ``variant``: the run's overrides beyond cell and seed
+    (sweep/identity.py). Returns a short summary (Hydra's job return value).
+    """
+    return run_jobs([(cfg, folder, sweep_dir, variant)])[0]
+
+
+Job = tuple  # (cfg, folder, sweep_dir, variant), as run_job takes them
+
+
+def run_jobs(jobs: Sequence[Job]) -> list[dict]:
+    """``run_job`` for each of ``jobs``: the runs left to compute (the launchers pass runs of one
+    table cell, other seeds: lockstep.runs of them) are computed together in one lockstep group
+    (lockstep/run.py), each still into its own folder, result and MLflow run. A single run on
+    the CPU computes as ``run.execute_run`` (the same curve, bit for bit, as in a group)."""
+    with contextlib.ExitStack() as claims:
+        summaries: list[dict | None] = [None] * len(jobs)
+        pending = []
+        for i, (cfg, folder, sweep_dir, variant) in enumerate(jobs):
+            spec, folder = run_spec(cfg), Path(folder)
+            job = _JobRef(cfg, spec, folder, sweep_dir, variant)
+            if not claims.enter_context(claimed(folder)):
+                # Another launch (of this sweep or one that overlaps it) is computing this run.
+                log.info("%s: being computed by another process, skipped", job.label)
+                summaries[i] = job.summary("busy", None, None)
+                continue
+            found = _reusable(job)
+            if found is not None:
+                summaries[i] = _report(job, *found)
+            else:
+                pending.append((i, job))
+        if pending and (len(pending) > 1 or str(pending[0][1].cfg.lockstep.device) != "cpu"):
+            results = _compute_lockstep([job for _, job in pending])
+        else:
+            results = [_compute(job.cfg, job.spec, job.folder, job.resolved, job.sweep_dir, job.variant)
+                       for _, job in pending]
+        for (i, job), result in zip(pending, results):
+            summaries[i] = _report(job, result, "done", None)
+    return summaries  # type: ignore[return-value]
+
+
+class _JobRef:
+    """One job's config, run, folder and names."""
+
+    def __init__(self, cfg: DictConfig, spec, folder: Path, sweep_dir, variant: str):
+        self.cfg, self.spec, self.folder, self.sweep_dir, self.variant = cfg, spec, folder, sweep_dir, variant
+        self.label = f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
+        resolved = OmegaConf.to_container(cfg, resolve=True)
+        assert isinstance(resolved, dict)
+        self.resolved = resolved
+
+    def summary(self, status: str, stale: str | None, reward_loss: float | None) -> dict:
+        return {"cell": str(self.cfg.cell), "seed": int(self.cfg.seed), "variant": self.variant,
+                "status": status, "stale": stale, "reward_loss": reward_loss, "folder": str(self.folder)}
+
+
+def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
+    """(result, "exists", why stale) of a finished run in the job's folder, logged to MLflow
+    from its files unless MLflow has it already; None when the run must be computed."""
+    cfg, folder = job.cfg, job.folder
+    if not RunResult.exists(folder):
+        return None
+    found = RunResult.read(folder)
+    check_same_run(found, job.spec, folder)
+    stale = found.stale()
+    if stale and cfg.rerun_stale:
+        return None
+    if cfg.tracking.enabled:
+        tags = run_tags(cfg, folder, job.spec, job.variant, str(found.code.get("digest", "")))
+        tracking.log_run(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                         run_name=run_name(cfg, job.variant), result=found,
+                         params=tracking.flatten(job.resolved), tags=tags, artifacts=_artifacts(folder))
+    return found, "exists", stale
+
+
+def _report(job: _JobRef, result: RunResult, status: str, stale: str | None) -> dict:
+    """The job's progress line and summary."""
+    cfg, sweep_dir = job.cfg, job.sweep_dir
+    sweep_name = f"{cfg.name}/{cfg.scale.name}"
+    run = "" if sweep_dir is None else job.folder.resolve().relative_to(Path(sweep_dir).resolve()).as_posix()
+    log.info("%s", progress.run_line(job.label, result, status, sweep_name,
+                                     None if sweep_dir is None else Path(sweep_dir), run, stale))
+    return job.summary(status, stale, result.reward_loss)
+
+
+def _compute_lockstep(jobs: Sequence[_JobRef]) -> list[RunResult]:
+    """The jobs' runs computed together; each result is written as soon as its run ends."""
+    from ..lockstep.run import execute_lockstep
+
+    cfg = jobs[0].cfg
+    _limit_threads(int(cfg.threads_per_run))
+    record = {"lockstep_runs": len(jobs), "device": str(cfg.lockstep.device)}
+    computing = [_Computing(j.cfg, j.spec, j.folder, j.resolved, j.sweep_dir, j.variant, record)
+                 for j in jobs]
+    log.info("%s: %d runs in lockstep (seeds %s) on %s", cfg.cell, len(jobs),
+             ",".join(str(j.cfg.seed) for j in jobs), record["device"])
+    try:
+        with _interrupt_on_sigterm():
+            return execute_lockstep([j.spec for j in jobs], [c.hooks for c in computing],
+                                    on_result=lambda k, result: computing[k].finished(result),
+                                    device=record["device"])
+    except BaseException as error:
+        for c in computing:
+            c.stopped(error)
+        raise
+
+
+def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, variant: str) -> RunResult:
+    """Run the learning run, followed live in MLflow; write its result into ``folder``."""
+    from ..run import execute_run
+
+    _limit_threads(int(cfg.threads_per_run))
+    job = _Computing(cfg, spec, folder, resolved, sweep_dir, variant)
+    try:
+        with _interrupt_on_sigterm():
+            hooks = job.hooks
+            result = execute_run(spec, progress=hooks.progress, progress_every=hooks.progress_every,
+                                 on_evaluation=hooks.on_evaluation, on_finish=hooks.on_finish)
+    except BaseException as error:
+        job.stopped(error)
+        raise
+    job.finished(result)
+    return result
+
+
+class _Computing:
+    """One run while it computes: its callbacks (progress, live MLflow run, saving the learner,
+    the orphan check) and what happens to its result."""
+
+    def __init__(self, cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, variant: str,
+                 lockstep: dict | None = None):
+        from ..lockstep.run import RunHooks
+        from ..provenance import code_version
+        from ..saved_learner import forget_learner, save_learner
+
+        self.folder, self.resolved, self.lockstep, self.done = folder, resolved, lockstep, False
+        self.spec = spec
+        # The folder's learner must be this run's: an older one goes before the run starts.
+        forget_learner(folder)
+        save = (lambda learner: save_learner(learner, spec, folder)) if cfg.save_learner else None
+        watch = None if sweep_dir is not None else progress.SingleRunProgress(spec)
+        self.live = None
+        if cfg.tracking.enabled:
+            digest = code_version(spec, lockstep=lockstep is not None)["digest"]
+            tags = run_tags(cfg, folder, spec, variant, digest)
+            try:
+                self.live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                                             run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
+                                             tags=tags)
+            except Exception as error:  # noqa: BLE001 - the store failed after the sweep's check
+                log.warning("%s: not followed in MLflow (%s: %s); rerunning the sweep logs it",
+                            folder, type(error).__name__, first_line(error))
+        orphaned = launcher_watch()
+
+        def evaluated(step: int, mean_reward: float, success_rate: float) -> None:
+            if watch is not None:
+                watch.evaluated(step, mean_reward, success_rate)
+            if self.live is not None:
+                self.live.evaluation(step, mean_reward, success_rate)
+            if orphaned():
+                # The launcher died (e.g. SIGKILL): nobody collects this run; a rerun redoes it.
+                raise KeyboardInterrupt("the launching process is gone")
+
+        self.hooks = RunHooks(progress=watch, progress_every=spec.budget // spec.eval_points,
+                              on_evaluation=evaluated, on_finish=save)
+
+    def finished(self, result: RunResult) -> None:
+        """Write the result (atomically) and end the MLflow run as finished."""
+        result.config = self.resolved
+        if self.lockstep is not None:  # the lockstep loop's code, and how the group ran
+            from ..provenance import code_version
+
+            result.code = {**code_version(self.spec, lockstep=True), **self.lockstep}
+        result.write(self.folder)
+        self.done = True
+        if self.live is not None:
+            self.live.finish(result, _artifacts(self.folder))
+
+    def stopped(self, error: BaseException) -> None:
+        if self.live is not None and not self.done:
+            self.live.end(tracking.stopped_status(error))
+
+
+@contextlib.contextmanager
+def _interrupt_on_sigterm():
+    """SIGTERM as KeyboardInterrupt while a run computes, so its MLflow run ends KILLED (the
+    default handler would end the process on the spot). Only the main thread can set it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _settings(cfg: DictConfig) -> tracking.TrackingSettings:
+    return tracking.TrackingSettings.from_config(cfg.tracking)
+
+
+def _artifacts(folder: Path) -> list[Path]:
+    files = [folder / "result.json", folder / "curve.csv"]
+    files += sorted((folder / ".hydra").glob("*.yaml"))
+    return [f for f in files if f.is_file()]
+
+
+def _limit_threads(threads: int) -> None:
+    # Sweeps run one job per core: a run that also spreads over all cores only slows the others.
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=threads)
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(threads)
