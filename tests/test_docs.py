@@ -256,9 +256,15 @@ def sweep_values(value: str) -> list[str] | None:
     return values
 
 
-def override_problems(words: list[str]) -> list[str]:
+PLUGIN_CONF = ROOT / "examples" / "plugins" / "my_plugins" / "conf"
+"""The worked plugin examples' config folder (docs/extending.md): its options count where a
+command puts it on the search path, and on the page that documents them."""
+
+
+def override_problems(words: list[str], plugins: bool = False) -> list[str]:
     """Problems of the Hydra overrides among words (a word may hold several, space-separated)."""
     problems = []
+    plugins = plugins or any("hydra.searchpath=" in word for word in words)
     for word in words:
         for token in word.split():
             if token.startswith("~") or "=" not in token:
@@ -270,6 +276,8 @@ def override_problems(words: list[str]) -> list[str]:
             options = group_options(key)
             if not options:
                 continue
+            if plugins:
+                options = (*options, *(f.stem for f in (PLUGIN_CONF / key).glob("*.yaml")))
             values = sweep_values(value)
             if values is None:
                 continue
@@ -412,7 +420,8 @@ def test_config_overrides_name_existing_options(path):
             # Inline code that only shows overrides: `env=tool_frame`, `tuned=provisional`.
             tokens = snippet.text.split()
             if tokens and all("=" in t and not t.startswith("-") for t in tokens):
-                problems += [f"{snippet.where()}: {p}" for p in override_problems(tokens)]
+                problems += [f"{snippet.where()}: {p}"
+                             for p in override_problems(tokens, plugins=path.name == "extending.md")]
     assert not problems, "overrides that name no option:\n" + "\n".join(dict.fromkeys(problems))
 
 

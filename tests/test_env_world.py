@@ -118,3 +118,17 @@ def test_direct_chipmunk_steps_match_space_step_exactly():
     assert poses[0] == poses[1]
     assert poses[0][0][0] != 1.5  # the target was pushed
     assert worlds[0].physics_steps == worlds[1].physics_steps
+
+
+def test_the_mediators_shape_is_config_and_the_paper_l_is_unchanged():
+    import math
+
+    from mediated_transfer.env import WorldConfig, tool_picking_locations
+
+    l_shape = tool_picking_locations((1.0, 2.0), 0.3, WorldConfig())
+    c, s = math.cos(0.3), math.sin(0.3)
+    assert l_shape[2].tolist() == [1.0 - 3.5 * s, 2.0 + 3.5 * c]  # exactly as before the key existed
+    stick = tool_picking_locations((0.0, 0.0), 0.0, WorldConfig(tool_hook_angle=180.0))
+    assert stick[0].tolist() == [7.0, 0.0] and stick[2][0] == -3.5 and abs(stick[2][1]) < 1e-12
+    with pytest.raises(ValueError, match="env.tool_hook_angle must lie in"):
+        WorldConfig(tool_hook_angle=200.0)

@@ -26,18 +26,19 @@ def _cli(root: Path, *args: str, module: str = "mediated_transfer") -> subproces
 def _sweep_and_report(root: Path, experiment: str, *overrides: str) -> str:
     ran = _cli(root, "-m", f"experiment={experiment}", "hydra/launcher=basic", "seed=0", *overrides)
     assert ran.returncode == 0, ran.stderr[-2000:]
-    report = _cli(root, f"experiment={experiment}", *[o for o in overrides if o.startswith("env=")],
-                  module="mediated_transfer.reporting")
+    # The report of the sweep's variant: its overrides beyond the table cell (the folder's name).
+    variant = [o for o in overrides if not o.startswith(("cell=", "strategy=", "n_source="))]
+    report = _cli(root, f"experiment={experiment}", *variant, module="mediated_transfer.reporting")
     assert report.returncode == 0, report.stderr[-2000:]
     return report.stdout
 
 
 def test_a_users_strategy_runs_in_a_table_sweep_and_gets_its_own_row(tmp_path):
-    _sweep_and_report(tmp_path, "table2_rbf", "cell=null", "strategy=easy_first", "n_source=3")
+    _sweep_and_report(tmp_path, "table2_rbf", "cell=custom", "strategy=easy_first", "n_source=3")
     result = json.loads((tmp_path / "multirun/table2_rbf/smoke/easy_first_3/seed=0/result.json").read_text())
     assert result["strategy"] == "easy_first" and result["config"]["strategy"]["max_attempts"] == 0
     assert result["code"]["plugins"][0]["target"] == "my_plugins.easy_first.EasyFirst"
-    table = (tmp_path / "reports/smoke/table2_rbf.md").read_text()
+    table = (tmp_path / "reports/smoke/table2_rbf.md").read_text()  # the baseline: no variant
     assert "| easy_first | 3 |" in table and "regular transfer" in table
 
 

@@ -199,3 +199,61 @@ def test_factory_rejects_unknown_names_and_mismatched_task_sets():
         make_strategy("scaffolded", tasks(4), SENSORS, rng())
     with pytest.raises(TypeError, match="unexpected keyword argument 'k'"):
         make_strategy("regular", tasks(3), k=3)
+
+
+# --- the generalised protocol in the run loop -----------------------------------------------
+
+
+class OutwardCurriculum:
+    """A curriculum over the task space (the shape of a reverse curriculum): a task at a target
+    distance that moves outward by one unit per solved episode, hearing every episode with the
+    learner's TD errors, done once the distance reaches the target tasks' annulus."""
+
+    source_tasks = "optional"
+    signals = ("td_error",)
+    heard: list = []
+
+    def __init__(self, context, start: float = 3.0):
+        self.space, self.rng, self.distance = context.task_space, context.rng, start
+        OutwardCurriculum.heard = []
+
+    def next_task(self):
+        return self.space.sample(self.rng, self.distance)
+
+    def report(self, outcome):
+        OutwardCurriculum.heard.append(outcome)
+        if outcome.task is not None and outcome.solved:
+            self.distance += 1.0
+
+    @property
+    def done(self):
+        return self.distance >= self.space.target_distances[0]
+
+
+def test_a_curriculum_chooses_tasks_of_the_task_space_and_hears_every_episode_with_td_errors():
+    from mediated_transfer.run import RunSpec, execute_run
+
+    spec = RunSpec(strategy="outward", strategy_target=f"{__name__}.OutwardCurriculum", strategy_params={"start": 3.0},
+                   budget=3000, eval_points=2, eval_episodes=2)
+    result = execute_run(spec.validate())
+    heard = OutwardCurriculum.heard
+    assert sum(o.length for o in heard) == 3000 and heard[-1].step == 3000
+    assert all(o.td_error is not None and o.td_error >= 0 for o in heard)
+    sources = [o for o in heard if o.task is not None]
+    assert sources and all(abs(o.task.target_distance - 3.0) < 1e-9 for o in sources[:1])
+    assert result.code["digest"] and result.strategy == "outward"
+
+
+def test_the_task_space_spans_source_to_target_distances():
+    from mediated_transfer.env.task_space import TaskSpace
+
+    space = TaskSpace()
+    assert space.source_distances == (2.0, 9.0) and space.target_distances == (10.5, 12.5) and space.reach == 10.0
+    generator = rng(4)
+    for distance in (2.5, 9.9, 11.0, (10.5, 12.5)):
+        task = space.sample(generator, distance)
+        assert not task.problems()
+        low, high = (distance, distance) if isinstance(distance, float) else distance
+        assert low - 1e-9 <= task.target_distance <= high + 1e-9
+    with pytest.raises(ValueError, match="outside the task space"):
+        space.sample(generator, 14.0)

@@ -59,6 +59,11 @@ class Learner:
     def never_learn(self, cell: str) -> int:
         return sum(map(never_learns, self.runs(cell)))
 
+    def stale(self) -> int:
+        """Runs computed by other code than the current (provenance): 0 when every verdict is
+        today's code's."""
+        return sum(bool(r.stale()) for c in self.cells.values() for r in (*c.results, *c.failed))
+
     def mean_curve_time(self, cell: str) -> int | None:
         return self.cells[cell].summary(MetricsConfig())["time_to_threshold"]
 
@@ -555,7 +560,7 @@ def headline(L: dict[str, Learner], claims: list[Claim] | None = None) -> str:
     """The README's headline: L_R per table against the paper's, the count of verdicts by kind, and
     each claim's verdict with its parts'."""
     claims = evaluate(L) if claims is None else claims
-    out = ["| Table (learner) | runs | L_R without transfer: ours / paper | transfer rows, N_source ≤ 100: "
+    out = ["| Table (learner) | runs (stale) | L_R without transfer: ours / paper | transfer rows, N_source ≤ 100: "
            "ours / paper | N_source = 5000 (regular, scaffolded): ours / paper |", "|---|---:|---:|---:|---:|"]
     for lr in L.values():
         runs = sum(len(c.results) + len(c.failed) for c in lr.cells.values())
@@ -566,7 +571,7 @@ def headline(L: dict[str, Learner], claims: list[Claim] | None = None) -> str:
         paper = [lr.paper[c].reward_loss_mean for c in small]
         base = lr.losses("none_0")
         big = [f"{lr.losses(c).mean():.1f}" if lr.runs(c) else "-" for c in ("regular_5000", "scaffolded_5000")]
-        out.append(f"| {lr.table} ({lr.name}) | {runs}/{len(lr.paper) * EXPECTED_RUNS} | {base.mean():.1f} ± {sem(base):.1f} / "
+        out.append(f"| {lr.table} ({lr.name}) | {runs}/{len(lr.paper) * EXPECTED_RUNS} ({lr.stale()}) | {base.mean():.1f} ± {sem(base):.1f} / "
                    f"{lr.paper['none_0'].reward_loss_mean:.1f} | {min(ours):.1f}-{max(ours):.1f} / "
                    f"{min(paper):.1f}-{max(paper):.1f} | {', '.join(big)} / {lr.paper['regular_5000'].reward_loss_mean:.0f}, "
                    f"{lr.paper['scaffolded_5000'].reward_loss_mean:.0f} |")
@@ -644,6 +649,7 @@ def summary(L: dict[str, Learner], claims: list[Claim]) -> list[str]:
              f"**Scope.** The paper's Tables II-IV at its scale (500k learning steps, 25 evaluation points of 100 "
              f"episodes, {EXPECTED_RUNS} seeds per row): "
              + ", ".join(f"{name} {counts[name]} of {total[name]} runs" for name in counts)
+             + f"; {sum(lr.stale() for lr in L.values())} of them stale (computed by other code than the current)"
              + f". Its six headline claims, split into {n_parts} parts as its text states them, each decided by the "
              "rules below. Not in scope: Table I (lost; ours is re-tuned), the figures (drawn from our runs in "
              "`reports/`).", "",
