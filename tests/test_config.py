@@ -71,8 +71,8 @@ def test_every_group_option_composes_into_a_valid_run(hydra_context, option):
     group, name = option.split("=")
     if group in ("algorithm", "representation"):
         assert getattr(spec, group) == name
-    if group == "cell":
-        assert f"{spec.strategy}_{spec.n_source}" == name == cfg.cell
+    if group == "cell":  # custom: the strategy and N_source the command gives
+        assert f"{spec.strategy}_{spec.n_source}" == cfg.cell == (name if name != "custom" else "none_0")
     if group == "n_source":
         assert spec.n_source == int(name)
 

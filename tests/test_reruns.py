@@ -12,6 +12,8 @@ from mediated_transfer.config.spec import spec_values
 from mediated_transfer.results import RESULT_FILE, RunResult
 from mediated_transfer.run import execute_run, spec_from_dict
 
+from .optional import needs_deep
+
 MULTIRUN = Path(__file__).resolve().parents[1] / "multirun"
 
 
@@ -27,7 +29,7 @@ def test_a_committed_paper_scale_run_reproduces_bit_for_bit(run):
         stored.first_target_reward_step, stored.source_phase_end, stored.source_tasks_solved)
 
 
-@pytest.mark.parametrize("table", ["table2_rbf", "table3_fsr", "table4_dnn"])
+@pytest.mark.parametrize("table", ["table2_rbf", "table3_fsr", pytest.param("table4_dnn", marks=needs_deep)])
 def test_every_committed_run_of_the_papers_tables_is_current(table):
     folders = [p.parent for p in (MULTIRUN / table / "paper").glob(f"*/seed=*/{RESULT_FILE}")]
     assert len(folders) == 220

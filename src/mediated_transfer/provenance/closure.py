@@ -106,7 +106,7 @@ class Closure:
 
     def _add_tree(self, name: str, tree: ast.AST, namespace: dict, pending: list, kind: str = "def") -> None:
         _strip_docstrings(tree)
-        self.units[(name, kind)] = ast.dump(tree, annotate_fields=False)
+        self.units[(name, kind)] = _dump(tree)
         namespace = {**namespace, **self._local_imports(tree, namespace)}
         for value_name, value in self._references(tree, namespace):
             if isinstance(value, (type, types.FunctionType)) or _underlying(value) is not value:
@@ -227,6 +227,22 @@ def _tree(obj: Any) -> ast.AST | None:
         return None
     module = ast.parse(source)
     return module.body[0] if module.body else None
+
+
+_NEWER_FIELDS = frozenset({"type_params", "default_value"})
+"""Fields later Pythons added to the syntax tree (3.12: type parameters; 3.13: their defaults):
+left out while empty, so the same code has the same digest on 3.11, 3.12 and 3.13."""
+
+
+def _dump(node: Any) -> str:
+    """The syntax tree as text, like ast.dump without field names, the same on every Python."""
+    if isinstance(node, ast.AST):
+        parts = [_dump(getattr(node, f, None)) for f in node._fields
+                 if not (f in _NEWER_FIELDS and not getattr(node, f, None))]
+        return f"{type(node).__name__}({', '.join(parts)})"
+    if isinstance(node, list):
+        return "[" + ", ".join(_dump(n) for n in node) + "]"
+    return repr(node)
 
 
 def _code_text(fn: types.FunctionType) -> str:
