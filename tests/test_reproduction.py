@@ -20,6 +20,8 @@ from mediated_transfer.reporting.verdicts import (ABSENT, DIRECTION, FAILS, HOLD
                                                   REPRODUCED, SHORT, VERDICTS, claim_verdict)
 from mediated_transfer.results import RunResult
 
+from .optional import needs_deep
+
 
 def test_iqm_is_the_mean_of_the_middle_half():
     assert iqm([1, 2, 3, 4, 5, 6, 7, 100]) == pytest.approx(4.5)  # 3, 4, 5, 6
@@ -158,6 +160,7 @@ def test_a_claims_verdict_is_derived_from_its_parts_and_each_has_a_direction():
     assert verdict_count(claims).count(",") == len(VERDICTS) - 1
 
 
+@needs_deep  # whether the DNN's runs are current is read from the DQN's code, which imports torch
 def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_path):
     from mediated_transfer.config.compose import CONF_DIR
 
@@ -178,6 +181,7 @@ def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_pa
     assert (CONF_DIR.parent / "reports" / "dqn_failure_ablation.md").is_file()
 
 
+@needs_deep
 def test_the_readmes_headline_is_the_one_the_committed_runs_give():
     from mediated_transfer.config.compose import CONF_DIR
     from mediated_transfer.reporting.reproduction import load, with_headline

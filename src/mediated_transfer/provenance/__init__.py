@@ -93,8 +93,8 @@ def staleness(recorded: dict[str, Any] | None, results_format: int | None, spec:
     lockstep = bool(recorded.get("lockstep"))
     try:
         current = run_digest(spec, lockstep)
-    except ValueError as error:  # a plugin that cannot be imported now
-        return f"its code cannot be found now ({error})"
+    except (ValueError, ImportError) as error:  # a plugin, or a learner's dependency, not importable now
+        return f"its code cannot be found now ({type(error).__name__}: {error})"
     digest = translate(recorded.get("digest"), run_kind(spec, lockstep))
     if digest != current:
         commit = recorded.get("commit") or "unknown"
