@@ -321,4 +321,5 @@ def _stable_repr(value: Any, depth: int = 0) -> str:
 
     if isinstance(value, enum.Enum):
         return f"{type(value).__qualname__}.{value.name}"
-    return f"<{type(value).__module__}.{type(value).__qualname__}>"
+    # The type's name only: where a standard type lives moves between Pythons (pathlib, 3.13).
+    return f"<{type(value).__qualname__}>"
