@@ -61,6 +61,9 @@ class RunResult:
     failure: str | None = None
     """Why the run was stopped as failed (e.g. its learner diverged); None: it ran its budget.
     A failed run's reward loss is NaN (null in result.json) and it has no time to threshold."""
+    choices: dict[str, Any] | None = None
+    """What the training episodes started from, per evaluation interval (transfer/choices.py);
+    None: not recorded (runs of other loops, or written before it was)."""
 
     @property
     def failed(self) -> bool:

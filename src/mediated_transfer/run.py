@@ -30,6 +30,7 @@ from .learners.factory import check_learner, learner_target, make_learner
 from .provenance import RESULTS_FORMAT, code_version
 from .results import RunResult
 from .transfer.source_tasks import source_task_set
+from .transfer.choices import EpisodeChoices
 from .transfer.strategy import (METHODS, SOURCE_TASKS, EpisodeOutcome, Strategy, StrategyContext, solved_count,
                                 start_episode, wants_td_error)
 
@@ -302,6 +303,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     td_signal = wants_td_error(strategy)
     env = MediatedInteractionEnv("target", world)
     curve = Curve(spec, streams, on_evaluation)
+    choices = EpisodeChoices(curve.every, spec.eval_points)
     progress_every = progress_every or curve.every
 
     source_phase_end: int | None = None
@@ -310,7 +312,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     env_seed: int | None = streams.env_seed
     while step < spec.budget and curve.failure is None:
         obs, _, task = start_episode(env, strategy, env_seed)
-        env_seed = None
+        env_seed, start = None, step
         terminated = False
         episode_return, length, td_total = 0.0, 0, 0.0
         while True:
@@ -332,6 +334,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
             if terminated or truncated or step >= spec.budget or curve.failure is not None:
                 break
         learner.end_episode()
+        choices.add(start, task is None, (env.task if task is None else task).target_distance, bool(terminated))
         was_done = strategy.done
         strategy.report(EpisodeOutcome(task, bool(terminated), episode_return, length, step,
                                        td_total / length if td_signal else None))
@@ -340,7 +343,8 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     wall = curve.stop()
     if on_finish is not None:
         on_finish(learner)
-    return run_result(spec, curve, strategy, learner.stats, source_phase_end, first_target_reward, wall)
+    return run_result(spec, curve, strategy, learner.stats, source_phase_end, first_target_reward, wall,
+                      choices.summary())
 
 
 def own_run_loop(spec: RunSpec):
@@ -350,8 +354,10 @@ def own_run_loop(spec: RunSpec):
 
 
 def run_result(spec: RunSpec, curve: Curve, strategy: Strategy, learner_stats: dict,
-               source_phase_end: int | None, first_target_reward: int | None, wall: float) -> RunResult:
-    """The RunResult of a finished (or failed) run."""
+               source_phase_end: int | None, first_target_reward: int | None, wall: float,
+               choices: dict | None = None) -> RunResult:
+    """The RunResult of a finished (or failed) run (``choices``: transfer/choices.py, from the
+    loops that record them)."""
     rewards_arr = np.asarray(curve.rewards)
     failure, world = curve.failure, spec.world
     # A failed run's partial curve has no reward loss or time to threshold: none is made up.
@@ -376,6 +382,7 @@ def run_result(spec: RunSpec, curve: Curve, strategy: Strategy, learner_stats: d
         code=code_version(spec),
         results_format=RESULTS_FORMAT,
         failure=failure,
+        choices=choices,
     )
 
 

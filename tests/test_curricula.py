@@ -1,0 +1,215 @@
+"""The automatic curricula of src/auto_curricula (plugins through the strategy API), each on
+scripted outcomes against its paper's description, and the record of what a run's episodes
+started from."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from auto_curricula.domain_randomisation import DomainRandomisation
+from auto_curricula.learnability import Learnability
+from auto_curricula.plr import PrioritizedLevelReplay
+from auto_curricula.reverse import ReverseCurriculum
+from mediated_transfer.env import Task
+from mediated_transfer.env.task_space import TaskSpace
+from mediated_transfer.transfer import EpisodeOutcome, StrategyContext
+from mediated_transfer.transfer.choices import EpisodeChoices
+
+SPACE = TaskSpace()
+REVERSE = dict(r_min=0.1, r_max=0.9, new_starts=10, old_starts=5, rollouts=5, brownian_std=1.0)
+
+
+def context(seed=0, n_tasks=0):
+    tasks = [Task((float(i) + 3.0, 0.0), (0.0, -3.0), 0.0) for i in range(n_tasks)]
+    return StrategyContext.of_tasks(tasks, np.random.default_rng(seed))
+
+
+def outcome(task, solved, td_error=None):
+    return EpisodeOutcome(task, bool(solved), 10.0 if solved else 0.0, 1, 1, td_error)
+
+
+def distance(task):
+    return None if task is None else task.target_distance
+
+
+# --- domain randomisation --------------------------------------------------------------------
+
+
+def test_domain_randomisation_draws_the_target_distance_uniformly_and_ignores_outcomes():
+    low, high = SPACE.distances
+    target_from = SPACE.target_distances[0]
+    runs = []
+    for solved in (True, False):  # no feedback: the outcomes must change nothing
+        strategy = DomainRandomisation(context(seed=3))
+        chosen = []
+        for _ in range(3000):
+            task = strategy.next_task()
+            chosen.append(distance(task))
+            strategy.report(outcome(task, solved))
+        assert not strategy.done
+        runs.append(chosen)
+    assert runs[0] == runs[1]
+    near = np.array([d for d in runs[0] if d is not None])
+    # A target task exactly when the drawn distance falls in the target annulus.
+    share = 1 - len(near) / len(runs[0])
+    assert share == pytest.approx((high - target_from) / (high - low), abs=0.03)
+    assert near.max() < target_from and near.min() >= low
+    assert stats.kstest(near, stats.uniform(loc=low, scale=target_from - low).cdf).pvalue > 0.01
+
+
+# --- reverse curriculum (Florensa et al. 2017) ----------------------------------------------
+
+
+def play_iteration(strategy, solves):
+    """One iteration: every start rolled out ``rollouts`` times, solved when ``solves(d)``."""
+    tried = []
+    for _ in range((strategy.new_starts + strategy.old_starts) * strategy.rollouts):
+        task = strategy.next_task()
+        tried.append(round(task.target_distance, 9))
+        strategy.report(outcome(task, solves(task.target_distance)))
+    return tried
+
+
+def test_reverse_starts_at_the_goal_and_tries_each_start_rollouts_times_per_iteration():
+    strategy = ReverseCurriculum(context(seed=1), **REVERSE)
+    starts = list(strategy._starts)
+    assert len(starts) == 15  # N_new + N_old = 10 + 5
+    low = SPACE.distances[0]
+    assert starts[10:] == [low] * 5  # replayed from starts_old: only the goal so far
+    assert all(low <= d <= low + 5 for d in starts[:10])  # Brownian from the goal, reflected
+    tried = play_iteration(strategy, lambda d: True)
+    counts = {d: tried.count(d) for d in set(tried)}
+    # Each start's episodes (a start may repeat, e.g. a replayed goal): 5 per start.
+    assert sum(counts.values()) == 75 and all(c % 5 == 0 for c in counts.values())
+    assert strategy.iterations == 1
+
+
+def test_reverse_keeps_the_starts_whose_success_lies_in_the_band():
+    strategy = ReverseCurriculum(context(seed=2), **REVERSE)
+    starts = np.array(strategy._starts)
+    edge = float(np.median(starts[:10]))
+    rate = {}
+    # Starts nearer than `edge` are always solved (too easy), farther ones 2 of 5 times (in band).
+    for _ in range(75):
+        task = strategy.next_task()
+        k = strategy._pending
+        rate.setdefault(k, 0)
+        rate[k] += 1
+        strategy.report(outcome(task, starts[k] < edge or rate[k] <= 2))
+    in_band = sorted(starts[(starts >= edge)].tolist())
+    assert sorted(strategy.good) == pytest.approx(in_band)
+    assert strategy.old[1:] == strategy.good  # good starts join starts_old
+    # The next iteration's new starts grow out of the good ones.
+    assert min(strategy._starts[:10]) >= min(in_band) - 5
+
+
+def test_reverse_grows_from_mastered_starts_when_none_is_in_the_band_and_ends_at_the_target_annulus():
+    strategy = ReverseCurriculum(context(seed=4), **REVERSE)
+    target_from = SPACE.target_distances[0]
+    frontier = []
+    for _ in range(400):  # a learner that masters everything it is given
+        play_iteration(strategy, lambda d: True)
+        if strategy.done:
+            break
+        frontier.append(max(strategy.good))
+    assert strategy.done, "mastered starts must carry the curriculum out to the target tasks"
+    assert frontier[-1] > frontier[0]
+    assert max(strategy._starts) >= target_from  # ended by a start in the annulus with R >= R_min
+
+
+def test_reverse_with_hopeless_starts_stays_at_the_previous_good_ones():
+    strategy = ReverseCurriculum(context(seed=5), **REVERSE)
+    play_iteration(strategy, lambda d: False)
+    assert strategy.good == [SPACE.distances[0]] and not strategy.done
+
+
+def test_reverse_refuses_a_band_that_is_not_one():
+    with pytest.raises(ValueError, match="strategy.r_min and strategy.r_max"):
+        ReverseCurriculum(context(), **{**REVERSE, "r_min": 0.9, "r_max": 0.1})
+
+
+# --- Prioritized Level Replay (Jiang et al. 2021) --------------------------------------------
+
+
+def test_plr_rank_prioritisation_and_staleness_follow_the_paper():
+    strategy = PrioritizedLevelReplay(context(n_tasks=2), temperature=0.1, staleness=0.0)
+    strategy.seen[:] = True
+    strategy.scores[:] = [3.0, 1.0, 2.0]  # ranks 1, 3, 2
+    h = np.array([1.0, 1 / 3, 1 / 2]) ** 10
+    np.testing.assert_allclose(strategy.replay_distribution(), h / h.sum())
+    strategy.staleness = 1.0
+    strategy.episodes = 10
+    strategy.last_sampled[:] = [10, 4, 8]  # 0, 6 and 2 episodes ago
+    np.testing.assert_allclose(strategy.replay_distribution(), [0, 0.75, 0.25])
+
+
+def test_plr_tries_unseen_levels_first_replays_the_highest_td_error_and_hands_out_target_tasks_as_none():
+    strategy = PrioritizedLevelReplay(context(seed=6, n_tasks=4), temperature=0.1, staleness=0.1)
+    error = {3.0: 5.0, 4.0: 0.1, 5.0: 0.1, 6.0: 0.1, None: 0.2}  # by target x (None: target task)
+    first = []
+    counts = {}
+    for episode in range(600):
+        task = strategy.next_task()
+        key = None if task is None else float(task.target_position[0])
+        if episode < 5:
+            first.append(key)
+        counts[key] = counts.get(key, 0) + 1
+        strategy.report(outcome(task, False, td_error=error[key]))
+    assert strategy.seen.all()
+    assert counts[3.0] > 0.8 * 600  # rank 1 at beta = 0.1 takes almost all replays
+    assert None in counts  # the target task is a level
+    assert not strategy.done
+
+
+def test_plr_needs_td_errors():
+    strategy = PrioritizedLevelReplay(context(n_tasks=1), temperature=0.1, staleness=0.1)
+    task = strategy.next_task()
+    with pytest.raises(RuntimeError, match="TD error"):
+        strategy.report(outcome(task, True))
+
+
+# --- learnability (SFL) ----------------------------------------------------------------------
+
+
+def test_learnability_buffers_the_levels_nearest_p_one_half_and_draws_from_it_at_rate_rho():
+    strategy = Learnability(context(seed=7, n_tasks=5), buffer_size=2, buffer_share=0.5, window=10)
+    success = {3.0: 1.0, 4.0: 0.5, 5.0: 0.2, 6.0: 0.0, 7.0: 0.5, None: 0.0}
+    for level, p in success.items():
+        index = strategy.levels.target if level is None else int(level) - 3
+        strategy.history[index].extend([1.0] * int(10 * p) + [0.0] * (10 - int(10 * p)))
+    np.testing.assert_allclose(strategy.learnability(), [0, 0.25, 0.16, 0, 0.25, 0])
+    assert strategy.buffer().tolist() == [1, 4]
+    counts = np.zeros(6)
+    for _ in range(6000):
+        task = strategy.next_task()
+        counts[strategy.levels.target if task is None else int(task.target_position[0]) - 3] += 1
+        strategy.levels._pending = None  # outcomes would move p: keep the buffer fixed here
+    expected = np.full(6, 0.5 / 6)
+    expected[[1, 4]] += 0.25
+    np.testing.assert_allclose(counts / 6000, expected, atol=0.02)
+
+
+def test_learnability_estimates_p_from_the_last_window_episodes():
+    strategy = Learnability(context(seed=8, n_tasks=1), buffer_size=1, buffer_share=1.0, window=4)
+    for solved in (True, True, True, True, False, False):
+        strategy.levels._pending = 0
+        strategy.report(outcome(strategy.levels.tasks[0], solved))
+    assert strategy.learnability()[0] == pytest.approx(0.25)  # last four: 1, 1, 0, 0
+    assert strategy.solved_count == 1
+
+
+# --- what the episodes started from -----------------------------------------------------------
+
+
+def test_episode_choices_are_binned_by_the_step_each_episode_started_at():
+    choices = EpisodeChoices(every=100, bins=3)
+    for start, target, d, solved in [(0, False, 2.0, True), (50, False, 4.0, False),
+                                     (150, True, 11.0, False), (299, True, 12.0, True), (300, True, 12.0, True)]:
+        choices.add(start, target, d, solved)
+    s = choices.summary()
+    assert s["episodes"] == [2, 1, 2]  # an episode begun at the last step joins the last bin
+    assert s["target_share"] == [0.0, 1.0, 1.0]
+    assert s["distance_median"] == [3.0, 11.0, 12.0]
+    assert s["solved_share"] == [0.5, 0.0, 1.0]
+    empty = EpisodeChoices(every=10, bins=2).summary()
+    assert empty["episodes"] == [0, 0] and empty["distance_median"] == [None, None]
