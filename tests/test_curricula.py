@@ -2,10 +2,14 @@
 scripted outcomes against its paper's description, and the record of what a run's episodes
 started from."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 from scipy import stats
 
+import auto_curricula
 from auto_curricula.domain_randomisation import DomainRandomisation
 from auto_curricula.learnability import Learnability
 from auto_curricula.plr import PrioritizedLevelReplay
@@ -13,7 +17,14 @@ from auto_curricula.reverse import ReverseCurriculum
 from mediated_transfer.env import Task
 from mediated_transfer.env.task_space import TaskSpace
 from mediated_transfer.transfer import EpisodeOutcome, StrategyContext
+from mediated_transfer.curricula.measures import verdict, word
+from mediated_transfer.results import RunResult
+from mediated_transfer.run import RunSpec, execute_run
 from mediated_transfer.transfer.choices import EpisodeChoices
+
+from .optional import importorskip
+
+CURRICULA_CONF = Path(auto_curricula.__file__).parent / "conf"
 
 SPACE = TaskSpace()
 REVERSE = dict(r_min=0.1, r_max=0.9, new_starts=10, old_starts=5, rollouts=5, brownian_std=1.0)
@@ -213,3 +224,77 @@ def test_episode_choices_are_binned_by_the_step_each_episode_started_at():
     assert s["solved_share"] == [0.5, 0.0, 1.0]
     empty = EpisodeChoices(every=10, bins=2).summary()
     assert empty["episodes"] == [0, 0] and empty["distance_median"] == [None, None]
+
+
+# --- the study end to end, and the curricula for other learners ------------------------------
+
+
+@pytest.mark.slow
+def test_the_study_sweeps_its_arms_and_reports_the_registered_verdict(tmp_path):
+    from mediated_transfer.curricula.__main__ import main as curricula_main
+    from mediated_transfer.sweep import tracking
+
+    from .test_sweep import _run_cli, fresh_store
+
+    fresh_store(tmp_path)
+    common = ["scale=smoke", f"paths.root={tmp_path}", "hydra.sweeper.params.seed=3000",
+              "representation=fsr", "hydra.searchpath=[pkg://auto_curricula.conf]"]
+    cells = "cell=none_0,regular_100,scaffolded_100,dr_0,plr_100"
+    _run_cli("experiment=curricula", "hydra/launcher=basic", cells, *common)
+    sweep_dir = tmp_path / "multirun" / "curricula_fsr" / "smoke"
+    found = sorted(p.relative_to(sweep_dir).parts[0] for p in sweep_dir.glob("*/seed=3000/representation=fsr/result.json"))
+    assert found == ["dr_0", "none_0", "plr_100", "regular_100", "scaffolded_100"]
+    plr = RunResult.read(sweep_dir / "plr_100" / "seed=3000" / "representation=fsr")
+    assert plr.code["plugins"][0]["target"] == "auto_curricula.plr.PrioritizedLevelReplay"
+    assert sum(plr.choices["episodes"]) > 0 and plr.source_tasks_solved >= 0
+    runs = tracking.find_runs(tracking.TrackingSettings(f"sqlite:///{tmp_path / 'mlflow.db'}"), "curricula_fsr",
+                              "tags.kind = 'run'")
+    assert sorted(r.data.tags["cell"] for r in runs) == found  # its own MLflow experiment
+
+    assert curricula_main([cells, *common]) == 0
+    report = (tmp_path / "reports" / "smoke" / "CURRICULA.md").read_text()
+    # Nothing is learned at smoke scale: every L_R is the maximum, every ratio 1, no curriculum
+    # beats the scaffolding, and the report says so by the registered words.
+    assert "**Does any automatic curriculum beat the paper's scaffolding?** **NO** (FSR: NO)" in report
+    assert "- FSR: domain randomisation undecided, PLR over C undecided." in report
+    for name in ("curricula_fsr.csv", "curricula_fsr_decision.csv", "curricula_curves.png", "curricula_choices.png"):
+        assert (tmp_path / "reports" / "smoke" / "curricula" / name).stat().st_size > 0
+
+
+def test_the_rule_words_a_ratio_by_its_interval():
+    assert word((0.8, 0.7, 0.95)) == "beats"
+    assert word((1.2, 1.05, 1.4)) == "worse"
+    assert word((0.9, 0.7, 1.1)) == "undecided"
+    assert verdict({"rbf": ["worse", "undecided"], "fsr": ["beats"]}) == ("YES", {"rbf": "NO", "fsr": "YES"})
+    assert verdict({"rbf": ["undecided"], "fsr": ["worse"]})[0] == "NO"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("cell", ["dr_0", "reverse_0", "learnability_100"])
+def test_sb3_ppo_learns_through_the_wrapper_on_a_curriculum(cell, tmp_path):
+    importorskip("stable_baselines3")
+    strategy, n_source = cell.rsplit("_", 1)
+    spec = RunSpec(algorithm="sb3_ppo", representation="network", strategy=strategy, n_source=int(n_source),
+                   strategy_target=plugin_target(strategy), strategy_params=plugin_params(strategy),
+                   algorithm_params={"n_steps": 128, "batch_size": 32, "n_epochs": 2}, seed=2,
+                   budget=600, eval_points=3, eval_episodes=3, source_pool_size=200, cache_dir=str(tmp_path))
+    result = execute_run(spec)
+    assert result.learner_stats["learning_steps"] == 600 and len(result.mean_reward) == 3
+    assert result.code["plugins"][0]["target"] == spec.strategy_target
+
+
+def test_a_td_error_curriculum_is_refused_for_a_learner_that_cannot_report_td_errors():
+    importorskip("stable_baselines3")
+    spec = RunSpec(algorithm="sb3_ppo", representation="network", strategy="plr", n_source=2,
+                   strategy_target=plugin_target("plr"), strategy_params=plugin_params("plr"))
+    with pytest.raises(ValueError, match="strategy=plr asks for the learner's TD errors"):
+        spec.validate()
+
+
+def plugin_target(name):
+    return str(OmegaConf.load(CURRICULA_CONF / "strategy" / f"{name}.yaml")["_target_"])
+
+
+def plugin_params(name):
+    node = OmegaConf.to_container(OmegaConf.load(CURRICULA_CONF / "strategy" / f"{name}.yaml"))
+    return {k: v for k, v in node.items() if k not in ("_target_", "name")}

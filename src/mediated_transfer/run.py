@@ -156,6 +156,13 @@ class RunSpec:
         target = self.strategy_class()
         plugins.check_interface("strategy", target, METHODS, "strategy")
         plugins.check_parameters("strategy", target, self.strategy_params, ("context",))
+        signals = tuple(getattr(plugins.owner_class(target), "signals", ()) or ())
+        if "td_error" in signals:  # only the project's own loop computes them (the learner's td_error)
+            learner = plugins.owner_class(learner_target(self.algorithm, self.algorithm_target))
+            if own_run_loop(self) is not None or not callable(getattr(learner, "td_error", None)):
+                raise ValueError(f"strategy={self.strategy} asks for the learner's TD errors, which "
+                                 f"algorithm={self.algorithm} does not report (its own run loop, or no "
+                                 "td_error method); use a learner of the project's loop (linear_q, dqn)")
 
     def _check_threshold(self) -> None:
         # <R> is a mean of episode rewards in {0, success_reward}: a threshold outside
