@@ -61,7 +61,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
             raise ConfigError(f"{' '.join(swept)} sweeps over values: add -m (--multirun)")
         _try_plugins(run_spec(base))
         _prepare_tracking(base)  # a store that cannot be reached stops the run now, in one line
-        return [_planned(base, Path(base.hydra.run.dir))]
+        return [_planned(base, Path(base.hydra.run.dir), base)]
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
     distinct = sorted({_without_seed(job) for job in jobs})
@@ -84,7 +84,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
             if cfg.rerun_stale and found.stale():
                 recompute.setdefault(sweep_dir, []).append(run)
         plans.setdefault(sweep_dir, []).append(run)
-        planned.append(_planned(cfg, folder))
+        planned.append(_planned(cfg, folder, base))
     _prepare_tracking(base)
     _warm_source_task_cache(list(specs.values()))
     for spec in specs.values():
@@ -95,11 +95,14 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
     return planned
 
 
-def _planned(cfg: DictConfig, folder: Path) -> "PlannedRun":
+def _planned(cfg: DictConfig, folder: Path, command: DictConfig) -> "PlannedRun":
     from .interrupted import PlannedRun  # not at the top: see _prepare_tracking
     from .tracking import TrackingSettings
 
-    settings = TrackingSettings.from_config(cfg.tracking) if cfg.tracking.enabled else None
+    # A SLURM job goes on when its launcher stops: its live MLflow run is not the launcher's to
+    # end. (The launcher is the command's: a job's config leaves Hydra's overrides out.)
+    elsewhere = "slurm" in str(OmegaConf.select(command, "hydra.launcher._target_", default="")).lower()
+    settings = TrackingSettings.from_config(cfg.tracking) if cfg.tracking.enabled and not elsewhere else None
     return PlannedRun(folder, run_where(cfg.paths.root, folder), str(cfg.name), settings)
 
 

@@ -61,7 +61,8 @@ def sigterm_interrupts() -> Iterator[None]:
 
 @dataclass(frozen=True)
 class PlannedRun:
-    """A run of a command: its folder, its MLflow experiment and store (None: not tracked)."""
+    """A run of a command: its folder, its MLflow experiment and store (None: not tracked, or
+    computed elsewhere, by a SLURM job that outlives its launcher)."""
 
     folder: Path
     where: str
