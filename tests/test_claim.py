@@ -41,3 +41,17 @@ def test_a_claim_dies_with_its_process_even_on_sigkill(tmp_path):
         assert time.time() < deadline, "the claim outlived its killed holder"
         time.sleep(0.1)
     assert (tmp_path / CLAIM_FILE).exists()
+
+
+def test_a_claim_file_follows_the_umask_so_that_a_group_can_share_it(tmp_path):
+    import os
+    import stat
+
+    for umask in (0o002, 0o022):
+        previous = os.umask(umask)
+        try:
+            with claimed(tmp_path / oct(umask)) as mine:
+                assert mine
+        finally:
+            os.umask(previous)
+        assert stat.S_IMODE((tmp_path / oct(umask) / CLAIM_FILE).stat().st_mode) == 0o666 & ~umask

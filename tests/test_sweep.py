@@ -4,6 +4,7 @@ single run is skipped when its result exists; the submitit local launcher runs j
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -386,34 +387,107 @@ def test_a_run_claimed_by_another_process_is_skipped_at_once(root, source_cache,
     assert not tracking.find_runs(_settings(root), "table2_rbf")
 
 
-def test_a_parallel_sweeps_runs_stop_when_its_launcher_is_killed(root, source_cache):
-    """SIGKILL of the launcher of a parallel sweep: each worker's run notices at its next
-    evaluation point, stops (MLflow: KILLED) and writes nothing, instead of computing on unseen."""
+def _group(pgid: int) -> dict[int, str]:
+    """The live processes of a process group: pid -> command line."""
+    found = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            state, _, group = stat.read_text().rsplit(")", 1)[1].split()[:3]
+            if int(group) == pgid and state != "Z":
+                found[int(stat.parent.name)] = (stat.parent / "cmdline").read_text().replace("\0", " ")
+        except (OSError, ValueError):
+            pass  # ended meanwhile
+    return found
+
+
+# How a parallel sweep is stopped: (what is signalled, the signal), the launcher's exit status
+# and the one line it ends with (None: it cannot say anything, it was SIGKILLed).
+STOPS = {
+    "launcher-SIGKILL": ("launcher", signal.SIGKILL, -9, None),
+    "launcher-SIGTERM": ("launcher", signal.SIGTERM, 143, "interrupted (SIGTERM): 0 of 2 runs finished, 2 left"),
+    "launcher-SIGINT": ("launcher", signal.SIGINT, 130, "interrupted (SIGINT): 0 of 2 runs finished, 2 left"),
+    "ctrl-c": ("group", signal.SIGINT, 130, "interrupted (SIGINT): 0 of 2 runs finished, 2 left"),
+    "worker-SIGKILL": ("worker", signal.SIGKILL, 1, "a worker process died ({SIGKILL(-9)}): 0 of 2 runs finished"),
+}
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc (Linux)")
+@pytest.mark.parametrize("stop", sorted(STOPS))
+def test_a_stopped_parallel_sweep_leaves_no_process_and_no_running_mlflow_run(root, source_cache, tmp_path, stop):
+    """A parallel sweep (2 loky workers) stopped while both runs compute: the workers and the
+    pool's resource trackers are gone within seconds (an orphaned worker watches its launcher),
+    every MLflow run ends KILLED (before the launcher exits, where it lives on to see to it),
+    nothing is written, and the launcher ends with one line, no traceback."""
+    target, signum, status, line = STOPS[stop]
     command = [sys.executable, "-m", "mediated_transfer", "-m", "cell=none_0", "seed=0,1", "hydra.launcher.n_jobs=2",
                *_common(root, source_cache), "scale.budget=4000000", "scale.eval_points=400"]
-    launcher = subprocess.Popen(command, cwd=CONF_DIR.parent, start_new_session=True,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    stderr = tmp_path / "stderr.txt"
+    with open(stderr, "w") as err:
+        launcher = subprocess.Popen(command, cwd=CONF_DIR.parent, start_new_session=True,
+                                    stdout=subprocess.DEVNULL, stderr=err)
+    client = _settings(root).client()
     try:
         deadline = time.time() + 180
-        while len(tracking.find_runs(_settings(root), "linear_q_rbf")) < 2 and time.time() < deadline:
-            time.sleep(0.5)
-        launcher.kill()
-        launcher.wait()
-        deadline = time.time() + 60
-        while time.time() < deadline:
+        while launcher.poll() is None and time.time() < deadline:
             runs = tracking.find_runs(_settings(root), "linear_q_rbf")
-            if runs and all(r.info.status != "RUNNING" for r in runs):
+            if len(runs) == 2 and all(client.get_metric_history(r.info.run_id, "mean_reward") for r in runs):
                 break
             time.sleep(0.5)
         else:
-            pytest.fail("the orphaned workers' runs kept running")
+            pytest.fail(f"the runs did not both compute within 180 s:\n{stderr.read_text()[-3000:]}")
+        if target == "launcher":
+            launcher.send_signal(signum)
+        elif target == "group":  # a terminal's Ctrl-C reaches every process of its foreground group
+            os.killpg(launcher.pid, signum)
+        else:
+            [worker, *_] = [pid for pid, cmd in _group(launcher.pid).items() if "loky" in cmd and "resource_tracker" not in cmd]
+            os.kill(worker, signum)
+        assert launcher.wait(timeout=60) == status
+        at_exit = [r.info.status for r in tracking.find_runs(_settings(root), "linear_q_rbf")]
+        deadline = time.time() + 20  # the launcher's workers and resource trackers
+        while _group(launcher.pid) and time.time() < deadline:
+            time.sleep(0.2)
+        assert not _group(launcher.pid), f"still alive 20 s after the launcher: {_group(launcher.pid)}"
     finally:
-        try:
-            os.killpg(launcher.pid, signal.SIGKILL)  # the workers too, whatever happened
-        except ProcessLookupError:
-            pass
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(launcher.pid, signal.SIGKILL)  # whatever happened
+    runs = tracking.find_runs(_settings(root), "linear_q_rbf")
     assert [r.info.status for r in runs] == ["KILLED", "KILLED"]
+    if line is not None:
+        assert at_exit == ["KILLED", "KILLED"]
+        text = stderr.read_text()
+        assert text.splitlines()[-1].startswith(line) and "Traceback" not in text
+        assert text.splitlines()[-1].endswith("run the same command to resume (finished runs are kept)")
     assert not list(root.rglob("result.json"))
+
+
+def test_a_run_interrupted_while_its_written_result_is_logged_ends_finished(root, source_cache, monkeypatch, capsys):
+    """Ctrl-C after the result is written, while it is logged to MLflow: the run is logged in
+    full and ends FINISHED (not RUNNING), and the command ends with one line, status 130."""
+    interrupted = []
+    real = tracking._log_artifacts
+
+    def ctrl_c_once(client, run_id, artifacts):
+        if not interrupted:
+            interrupted.append(run_id)
+            os.kill(os.getpid(), signal.SIGINT)  # a real Ctrl-C, delivered on the next bytecode
+            time.sleep(1)
+        return real(client, run_id, artifacts)
+
+    monkeypatch.setattr(tracking, "_log_artifacts", ctrl_c_once)
+    try:
+        _run_cli("-m", "experiment=table2_rbf", "cell=none_0", "seed=0", "hydra/launcher=basic",
+                 *_common(root, source_cache))
+    except KeyboardInterrupt:  # would stop pytest itself
+        pytest.fail("Ctrl-C came out of the command as a KeyboardInterrupt (a traceback)")
+    except SystemExit as stopped:
+        assert stopped.code == 130 and interrupted
+    else:
+        pytest.fail("the command was not interrupted")
+    assert capsys.readouterr().err.strip().splitlines()[-1].startswith("interrupted (SIGINT): 1 of 1 runs finished")
+    [run] = tracking.find_runs(_settings(root), "table2_rbf")
+    assert run.info.status == "FINISHED" and "reward_loss" in run.data.metrics
+    assert {a.path for a in _settings(root).client().list_artifacts(run.info.run_id)} >= {"result.json", "curve.csv"}
 
 
 def test_a_run_started_in_the_background_finishes_after_its_shell_exits(root, source_cache):
@@ -461,3 +535,75 @@ def test_an_unreachable_tracking_server_stops_the_command_at_once_in_one_line(tm
     assert str(error.value).startswith("Could not prepare the runs: ") and "\n" not in str(error.value)
     assert time.perf_counter() - start < 60  # MLflow's own retries would take minutes
     assert not list(tmp_path.iterdir())
+
+
+SHARE_GROUP, SHARE_USERS = "mt-share", ("mt-share-a", "mt-share-b")
+
+
+def _as_user(user: str, args: list[str], home: Path) -> subprocess.CompletedProcess:
+    """``python *args`` as ``user`` of SHARE_GROUP, umask 002. It may read
+    everything (CAP_DAC_READ_SEARCH: this interpreter may live in root's 0700 home) and write
+    only what the user may, which is what is tested."""
+    command = ["setpriv", f"--reuid={user}", f"--regid={SHARE_GROUP}", "--init-groups",
+               "--inh-caps=+dac_read_search", "--ambient-caps=+dac_read_search",
+               sys.executable, *args]
+    return subprocess.run(command, cwd=CONF_DIR.parent, env={**os.environ, "HOME": str(home)}, umask=0o002,
+                          capture_output=True, text=True, timeout=600)
+
+
+def _shared_users() -> str | None:
+    """Create SHARE_GROUP and SHARE_USERS if missing (kept: other test sessions may use them);
+    why not, if they cannot be."""
+    import shutil
+
+    if os.geteuid() != 0:
+        return "creates a group and two users: needs root"
+    missing = [tool for tool in ("groupadd", "useradd", "setpriv", "getent") if shutil.which(tool) is None]
+    if missing:
+        return f"needs {', '.join(missing)}"
+    subprocess.run(["groupadd", "-f", SHARE_GROUP], check=True, capture_output=True)
+    for user in SHARE_USERS:
+        if subprocess.run(["getent", "passwd", user], capture_output=True).returncode != 0:
+            # 9: made meanwhile by another session
+            added = subprocess.run(["useradd", "-M", "-N", "-g", SHARE_GROUP, "-s", "/usr/sbin/nologin", user],
+                                   capture_output=True, text=True)
+            if added.returncode not in (0, 9):
+                return f"useradd {user}: {added.stderr.strip()}"
+    probe = _as_user(SHARE_USERS[0], ["-c", "import mediated_transfer.app"], Path("/tmp"))
+    if probe.returncode != 0:
+        return f"cannot run the package as {SHARE_USERS[0]} with setpriv: {probe.stderr.strip()[-300:]}"
+    return None
+
+
+def test_two_users_of_one_group_share_a_sweep_and_its_store():
+    """A collaborator in the same group (umask 002) runs the same sweep, in the same folder and
+    MLflow store, after the first: it finds the first's runs, computes its own, and the files a
+    sweep creates (claims, the store's lock, the SQLite store) are group-writable like results."""
+    import shutil
+    import stat
+    import tempfile
+
+    reason = _shared_users()
+    if reason is not None:
+        pytest.skip(reason)
+    shared = Path(tempfile.mkdtemp(prefix="mt-share-"))  # not under pytest's 0700 folders
+    try:
+        shutil.chown(shared, group=SHARE_GROUP)
+        shared.chmod(0o2775)  # a group's folder: what is made in it belongs to the group
+        common = ["-m", "mediated_transfer", "-m", "cell=none_0", "hydra/launcher=basic", "scale=smoke",
+                  f"paths.root={shared}", f"paths.cache_dir={shared / 'cache'}"]
+        for user, seeds in zip(SHARE_USERS, ("seed=0,1", "seed=0,1,2")):
+            done = _as_user(user, [*common, seeds], shared)
+            assert done.returncode == 0, f"{user}: {done.stderr[-3000:]}"
+        sweep_dir = shared / "multirun" / "linear_q_rbf" / "smoke"
+        assert set(_results(sweep_dir)) == {f"none_0/seed={s}" for s in range(3)}
+        made = [shared / "mlflow.db", shared / "mlflow.db.lock", *sweep_dir.glob("*/seed=*/.claim")]
+        assert len(made) == 5
+        assert {p.relative_to(shared).as_posix(): oct(stat.S_IMODE(p.stat().st_mode)) for p in made} == {
+            p.relative_to(shared).as_posix(): "0o664" for p in made}
+        assert (sweep_dir / "none_0" / "seed=2" / ".claim").owner() == SHARE_USERS[1]
+        runs = tracking.find_runs(_settings(shared), "linear_q_rbf", "tags.kind = 'run'")
+        assert sorted(r.data.tags["seed"] for r in runs) == ["0", "1", "2"]
+        assert all(r.info.status == "FINISHED" for r in runs)
+    finally:
+        shutil.rmtree(shared, ignore_errors=True)

@@ -336,3 +336,20 @@ def test_a_store_failing_during_a_run_stops_following_it_but_not_the_run(setting
         live.evaluation(200, 2.0, 0.2)
     live.evaluation(300, 3.0, 0.3)  # silently nothing: following has stopped
     live.finish(synthetic_result())
+
+
+def test_the_sqlite_store_and_its_lock_follow_the_umask_so_that_a_group_can_share_them(tmp_path):
+    """SQLite creates its file 0644 whatever the umask (and its journals take that mode): a
+    collaborator of the group could not log into a store the other one created."""
+    import os
+    import stat
+
+    db = tmp_path / "store" / "mlflow.db"
+    previous = os.umask(0o002)
+    try:
+        tracking.prepare(tracking.TrackingSettings(f"sqlite:///{db}"), experiment="table_x")
+    finally:
+        os.umask(previous)
+    for path in (db, db.with_name("mlflow.db.lock")):
+        assert stat.S_IMODE(path.stat().st_mode) == 0o664, path
+    assert tracking.TrackingSettings(f"sqlite:///{db}").client().get_experiment_by_name("table_x") is not None

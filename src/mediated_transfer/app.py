@@ -2,11 +2,13 @@
 
 ``cli`` checks the command first (sweep.preflight: every job's config, one-line errors, before
 any folder exists), then hands it to Hydra. Each job (``main``) is sweep/job.py's ``run_job``:
-reuse or compute the run, write it, log it, print its progress line.
+reuse or compute the run, write it, log it, print its progress line. A command stopped by Ctrl-C,
+SIGTERM or a dead worker ends its runs' MLflow runs and says so in one line (sweep/interrupted.py).
 """
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -17,7 +19,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
-from .sweep import preflight
+from .sweep import interrupted, preflight
 from .sweep.job import run_job, run_jobs  # noqa: F401 - the launchers' and tests' door
 
 
@@ -42,6 +44,24 @@ def cli(argv: Sequence[str] | None = None) -> Any:
 
     args = sys.argv[1:] if argv is None else list(argv)
     parsed = get_args_parser().parse_args(args)
+    runs: list = []
+    try:
+        with interrupted.sigterm_interrupts():
+            return _cli(args, parsed, runs)
+    except (KeyboardInterrupt, interrupted.WorkerLost) as error:
+        # Ctrl-C, SIGTERM or a dead worker: the runs its workers left RUNNING end, one line.
+        with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C: stop settling, quietly
+            interrupted.settle(runs)
+        line, status = interrupted.exit_line(runs, error)
+        print(line, file=sys.stderr)
+        raise SystemExit(status) from None
+    except BaseException:  # a run's error (Hydra printed it): the runs its pool killed end too
+        with contextlib.suppress(Exception, KeyboardInterrupt):
+            interrupted.settle(runs)
+        raise
+
+
+def _cli(args: list[str], parsed, runs: list) -> Any:
     try:
         if parsed.config_name or parsed.config_path or parsed.config_dir:
             raise ConfigError("--config-name/--config-path/--config-dir: this entry point composes "
@@ -51,7 +71,7 @@ def cli(argv: Sequence[str] | None = None) -> Any:
         informational = (parsed.help or parsed.hydra_help or parsed.cfg or parsed.info
                          or parsed.shell_completion)
         if not informational:
-            preflight(parsed.overrides, multirun=parsed.multirun)
+            runs += preflight(parsed.overrides, multirun=parsed.multirun)
     except ConfigError as error:
         raise SystemExit(f"Invalid configuration: {error}") from None
     except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line

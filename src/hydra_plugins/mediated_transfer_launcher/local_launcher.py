@@ -1,7 +1,7 @@
 """``hydra/launcher=parallel`` (the default): Hydra's joblib launcher, one worker process per
 core, which hands a cell's seeds to one worker as a lockstep group when ``lockstep.runs`` (or a
 GPU device) asks for groups (mediated_transfer.lockstep.launch). Without groups it is Hydra's
-joblib launcher unchanged.
+joblib launcher, except that a worker that dies ends the sweep in one line.
 """
 
 # No `from __future__ import annotations`: Hydra's plugin scan executes this module outside
@@ -49,6 +49,18 @@ def _execute_group(indices: List[int], overrides: List[List[str]], hydra_context
 
 class MediatedJoblibLauncher(JoblibLauncher):
     def launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
+        from joblib.externals.loky.process_executor import BrokenProcessPool
+
+        from mediated_transfer.sweep.interrupted import WorkerLost, worker_lost_line
+
+        try:
+            return self._launch(job_overrides, initial_job_idx)
+        except BrokenProcessPool as error:
+            # A worker died (killed, out of memory): one line, not joblib's paragraph and
+            # traceback; the entry point ends the MLflow runs the pool's workers left RUNNING.
+            raise WorkerLost(worker_lost_line(error)) from None
+
+    def _launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
         from joblib import Parallel, delayed
 
         from mediated_transfer.lockstep.launch import lockstep_groups

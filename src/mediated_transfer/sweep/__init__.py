@@ -11,7 +11,8 @@ bad config stops the command before any folder exists, and its errors are never 
 warnings (Hydra's callbacks would do that). For a sweep it composes every distinct job config
 (seeds do not change validity) and checks it, then creates the MLflow store and experiment once
 (SQLite must not be initialised by parallel workers), clusters the source task sets once, and
-writes the plan that progress lines count against.
+writes the plan that progress lines count against. It returns the command's runs, which the
+entry point settles if the command is stopped (``interrupted``).
 """
 
 from __future__ import annotations
@@ -35,9 +36,11 @@ from ..atomic import atomic_write_text
 from ..config.compose import ConfigError, compose_config, prepare_overrides
 from ..config.spec import check_same_run, run_spec
 from ..results import RunResult
+from .identity import run_where
 
 if TYPE_CHECKING:
     from ..run import RunSpec
+    from .interrupted import PlannedRun
 
 log = logging.getLogger("mediated_transfer")
 
@@ -45,9 +48,9 @@ PLAN_PREFIX = ".sweep_plan."
 """Plans are written into the sweep folder before the jobs start: which runs a launch has."""
 
 
-def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | None:
+def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
     """Check the command's config(s) and prepare a sweep; ConfigError (one line) if anything is
-    wrong. Returns the sweep's job override lists, None for a single run."""
+    wrong. Returns the command's runs (one for a single run)."""
     overrides = prepare_overrides(overrides)  # also refuses an override Hydra cannot parse
     parsed = OverridesParser.create().parse_overrides(list(overrides))
     fixed = [o.input_line for o in parsed if not o.is_sweep_override()]
@@ -58,7 +61,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
             raise ConfigError(f"{' '.join(swept)} sweeps over values: add -m (--multirun)")
         _try_plugins(run_spec(base))
         _prepare_tracking(base)  # a store that cannot be reached stops the run now, in one line
-        return None
+        return [_planned(base, Path(base.hydra.run.dir), base)]
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
     distinct = sorted({_without_seed(job) for job in jobs})
@@ -68,6 +71,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
     specs = {job: run_spec(cfg) for job, cfg in configs.items()}
     plans: dict[Path, list[str]] = {}
     recompute: dict[Path, list[str]] = {}
+    planned = []
     for job in jobs:
         cfg = _with_seed(configs[_without_seed(job)], job)
         sweep_dir, run = Path(cfg.hydra.sweep.dir), str(cfg.hydra.sweep.subdir).rstrip("/")
@@ -80,6 +84,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
             if cfg.rerun_stale and found.stale():
                 recompute.setdefault(sweep_dir, []).append(run)
         plans.setdefault(sweep_dir, []).append(run)
+        planned.append(_planned(cfg, folder, base))
     _prepare_tracking(base)
     _warm_source_task_cache(list(specs.values()))
     for spec in specs.values():
@@ -87,7 +92,18 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[list[str]] | Non
     for sweep_dir, runs in plans.items():
         write_plan(sweep_dir, runs, recompute.get(sweep_dir, []))
         log.info("sweep %s: %d runs in %s", base.name, len(runs), sweep_dir)
-    return jobs
+    return planned
+
+
+def _planned(cfg: DictConfig, folder: Path, command: DictConfig) -> "PlannedRun":
+    from .interrupted import PlannedRun  # not at the top: see _prepare_tracking
+    from .tracking import TrackingSettings
+
+    # A SLURM job goes on when its launcher stops: its live MLflow run is not the launcher's to
+    # end. (The launcher is the command's: a job's config leaves Hydra's overrides out.)
+    elsewhere = "slurm" in str(OmegaConf.select(command, "hydra.launcher._target_", default="")).lower()
+    settings = TrackingSettings.from_config(cfg.tracking) if cfg.tracking.enabled and not elsewhere else None
+    return PlannedRun(folder, run_where(cfg.paths.root, folder), str(cfg.name), settings)
 
 
 def write_plan(sweep_dir: Path, runs: list[str], recompute: Sequence[str] = ()) -> Path:

@@ -6,6 +6,9 @@ run at once, so no run is computed twice and no MLflow run is deleted while anot
 is still logging it. The claim is an advisory lock (``flock``) on a file in the folder: the
 kernel releases it when its holder ends, however it ends (even SIGKILL), so a claim never
 outlives a dead process.
+
+Lock files (a claim, the SQLite store's lock) are created with the user's usual mode (umask),
+as results are: under umask 002 a collaborator of the same group locks them too.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ def claimed(folder: str | os.PathLike) -> Iterator[bool]:
     another process holds it."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    fd = os.open(folder / CLAIM_FILE, os.O_CREAT | os.O_RDWR, 0o644)
+    fd = open_lock_file(folder / CLAIM_FILE)
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -38,3 +41,13 @@ def claimed(folder: str | os.PathLike) -> Iterator[bool]:
             fcntl.flock(fd, fcntl.LOCK_UN)
     finally:
         os.close(fd)
+
+
+def open_lock_file(path: str | os.PathLike) -> int:
+    """A descriptor to ``flock`` ``path`` with, creating it as 0666 less the umask. A lock file
+    another user made without group write access is opened read-only: flock needs no write
+    access (NFS's emulation does; there, the umask above is what makes it work)."""
+    try:
+        return os.open(path, os.O_CREAT | os.O_RDWR, 0o666)
+    except PermissionError:
+        return os.open(path, os.O_RDONLY)

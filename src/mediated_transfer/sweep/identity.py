@@ -41,9 +41,7 @@ def run_tags(cfg: DictConfig, folder: Path, spec: "RunSpec", variant: str, code_
     how re-running a sweep avoids duplicate MLflow runs; another config in the same folder, or
     the same run recomputed by other code, gets another key.
     """
-    root = Path(cfg.paths.root).resolve()
-    path = folder.resolve()
-    where = path.relative_to(root).as_posix() if path.is_relative_to(root) else path.as_posix()
+    where = run_where(cfg.paths.root, folder)
     return {
         "table": str(cfg.name),
         "cell": str(cfg.cell),
@@ -55,3 +53,9 @@ def run_tags(cfg: DictConfig, folder: Path, spec: "RunSpec", variant: str, code_
         "variant": variant_label(variant),
         "run_key": f"{where}@{spec_digest(spec)}.{code_digest}",
     }
+
+
+def run_where(root: str | Path, folder: str | Path) -> str:
+    """A run's folder as its run key begins: relative to paths.root (absolute if outside it)."""
+    root, path = Path(root).resolve(), Path(folder).resolve()
+    return path.relative_to(root).as_posix() if path.is_relative_to(root) else path.as_posix()

@@ -12,9 +12,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import signal
 import sys
-import threading
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -26,7 +24,8 @@ from ..results import RunResult
 from . import progress, tracking
 from .claim import claimed
 from .identity import run_name, run_tags
-from .orphan import launcher_watch
+from .interrupted import sigterm_interrupts
+from .orphan import guard
 
 log = logging.getLogger("mediated_transfer")
 
@@ -48,8 +47,9 @@ def run_jobs(jobs: Sequence[Job]) -> list[dict]:
     """``run_job`` for each of ``jobs``: the runs left to compute (the launchers pass runs of one
     table cell, other seeds: lockstep.runs of them) are computed together in one lockstep group
     (lockstep/run.py), each still into its own folder, result and MLflow run. A single run on
-    the CPU computes as ``run.execute_run`` (the same curve, bit for bit, as in a group)."""
-    with contextlib.ExitStack() as claims:
+    the CPU computes as ``run.execute_run`` (the same curve, bit for bit, as in a group).
+    In a pool's worker, the jobs stop (and the worker exits) once its launcher is gone."""
+    with guard(), contextlib.ExitStack() as claims:
         summaries: list[dict | None] = [None] * len(jobs)
         pending = []
         for i, (cfg, folder, sweep_dir, variant) in enumerate(jobs):
@@ -105,7 +105,7 @@ def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
         tags = run_tags(cfg, folder, job.spec, job.variant, str(found.code.get("digest", "")))
         tracking.log_run(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
                          run_name=run_name(cfg, job.variant), result=found,
-                         params=tracking.flatten(job.resolved), tags=tags, artifacts=_artifacts(folder))
+                         params=tracking.flatten(job.resolved), tags=tags, artifacts=run_artifacts(folder))
     return found, "exists", stale
 
 
@@ -131,7 +131,7 @@ def _compute_lockstep(jobs: Sequence[_JobRef]) -> list[RunResult]:
     log.info("%s: %d runs in lockstep (seeds %s) on %s", cfg.cell, len(jobs),
              ",".join(str(j.cfg.seed) for j in jobs), record["device"])
     try:
-        with _interrupt_on_sigterm():
+        with sigterm_interrupts():
             return execute_lockstep([j.spec for j in jobs], [c.hooks for c in computing],
                                     on_result=lambda k, result: computing[k].finished(result),
                                     device=record["device"])
@@ -148,20 +148,20 @@ def _compute(cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, var
     _limit_threads(int(cfg.threads_per_run))
     job = _Computing(cfg, spec, folder, resolved, sweep_dir, variant)
     try:
-        with _interrupt_on_sigterm():
+        with sigterm_interrupts():
             hooks = job.hooks
             result = execute_run(spec, progress=hooks.progress, progress_every=hooks.progress_every,
                                  on_evaluation=hooks.on_evaluation, on_finish=hooks.on_finish)
+            job.finished(result)
     except BaseException as error:
         job.stopped(error)
         raise
-    job.finished(result)
     return result
 
 
 class _Computing:
-    """One run while it computes: its callbacks (progress, live MLflow run, saving the learner,
-    the orphan check) and what happens to its result."""
+    """One run while it computes: its callbacks (progress, live MLflow run, saving the learner)
+    and what happens to its result."""
 
     def __init__(self, cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, variant: str,
                  lockstep: dict | None = None):
@@ -169,7 +169,8 @@ class _Computing:
         from ..provenance import code_version
         from ..saved_learner import forget_learner, save_learner
 
-        self.folder, self.resolved, self.lockstep, self.done = folder, resolved, lockstep, False
+        self.folder, self.resolved, self.lockstep = folder, resolved, lockstep
+        self.result: RunResult | None = None
         self.spec = spec
         # The folder's learner must be this run's: an older one goes before the run starts.
         forget_learner(folder)
@@ -186,16 +187,12 @@ class _Computing:
             except Exception as error:  # noqa: BLE001 - the store failed after the sweep's check
                 log.warning("%s: not followed in MLflow (%s: %s); rerunning the sweep logs it",
                             folder, type(error).__name__, first_line(error))
-        orphaned = launcher_watch()
 
         def evaluated(step: int, mean_reward: float, success_rate: float) -> None:
             if watch is not None:
                 watch.evaluated(step, mean_reward, success_rate)
             if self.live is not None:
                 self.live.evaluation(step, mean_reward, success_rate)
-            if orphaned():
-                # The launcher died (e.g. SIGKILL): nobody collects this run; a rerun redoes it.
-                raise KeyboardInterrupt("the launching process is gone")
 
         self.hooks = RunHooks(progress=watch, progress_every=spec.budget // spec.eval_points,
                               on_evaluation=evaluated, on_finish=save)
@@ -208,38 +205,27 @@ class _Computing:
 
             result.code = {**code_version(self.spec, lockstep=True), **self.lockstep}
         result.write(self.folder)
-        self.done = True
+        self.result = result
         if self.live is not None:
-            self.live.finish(result, _artifacts(self.folder))
+            self.live.finish(result, run_artifacts(self.folder))
 
     def stopped(self, error: BaseException) -> None:
-        if self.live is not None and not self.done:
+        if self.live is None:
+            return
+        if self.result is not None:
+            # Stopped while its written result was being logged: logged in full, FINISHED (once
+            # finished, the live run ignores this).
+            self.live.finish(self.result, run_artifacts(self.folder))
+        else:
             self.live.end(tracking.stopped_status(error))
-
-
-@contextlib.contextmanager
-def _interrupt_on_sigterm():
-    """SIGTERM as KeyboardInterrupt while a run computes, so its MLflow run ends KILLED (the
-    default handler would end the process on the spot). Only the main thread can set it."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt(f"signal {signum}")
-
-    previous = signal.signal(signal.SIGTERM, interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def _settings(cfg: DictConfig) -> tracking.TrackingSettings:
     return tracking.TrackingSettings.from_config(cfg.tracking)
 
 
-def _artifacts(folder: Path) -> list[Path]:
+def run_artifacts(folder: Path) -> list[Path]:
+    """A run's files logged with its MLflow run."""
     files = [folder / "result.json", folder / "curve.csv"]
     files += sorted((folder / ".hydra").glob("*.yaml"))
     return [f for f in files if f.is_file()]

@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from ..results import RunResult
+from .claim import open_lock_file
 
 KIND_RUN = "run"
 KIND_SUMMARY = "cell_summary"
@@ -88,8 +89,21 @@ class TrackingSettings:
         from mlflow.tracking import MlflowClient
 
         if self.uri.startswith("sqlite:///"):
-            Path(self.uri.removeprefix("sqlite:///")).parent.mkdir(parents=True, exist_ok=True)
+            _create_store_file(Path(self.uri.removeprefix("sqlite:///")))
         return MlflowClient(tracking_uri=self.uri)
+
+
+def _create_store_file(db: Path) -> None:
+    """Create an SQLite store's file (empty: a valid empty database) with the user's usual mode.
+    SQLite would create it 0644 whatever the umask, and its journals take the file's mode: a
+    collaborator of the group could not log into a store the other one created."""
+    db.parent.mkdir(parents=True, exist_ok=True)
+    if db.name in ("", ":memory:"):
+        return
+    try:
+        os.close(os.open(db, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+    except FileExistsError:
+        pass
 
 
 CHECK_TIMEOUT_S = 10
@@ -139,7 +153,7 @@ def _store_lock(settings: TrackingSettings):
         return
     lock = Path(settings.uri.removeprefix("sqlite:///") + ".lock")
     lock.parent.mkdir(parents=True, exist_ok=True)
-    fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
+    fd = open_lock_file(lock)  # the umask's mode: a collaborator of the group prepares the store too
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)  # waits for the other: creating the tables takes seconds
         yield
@@ -226,6 +240,13 @@ class LiveRun:
         params_list = [Param(k, v) for k, v in params.items()]
         for i in range(0, len(params_list), _BATCH["params"]):
             client.log_batch(self.run_id, params=params_list[i:i + _BATCH["params"]])
+
+    @classmethod
+    def resume(cls, settings: TrackingSettings, run_id: str) -> "LiveRun":
+        """The live run ``run_id``, left RUNNING by a process that is gone, to end it."""
+        live = cls.__new__(cls)
+        live.client, live.run_id = settings.client(), run_id
+        return live
 
     def evaluation(self, step: int, mean_reward: float, success_rate: float) -> None:
         from mlflow.entities import Metric
@@ -404,6 +425,11 @@ def _search(client, experiment_id: str, filter_string: str) -> list:
         token = page.token
         if not token:
             return runs
+
+
+def running_runs(client, experiment_id: str) -> list:
+    """The learning runs of an experiment whose MLflow run is RUNNING."""
+    return _search(client, experiment_id, f"attributes.status = 'RUNNING' and tags.kind = '{KIND_RUN}'")
 
 
 def find_runs(settings: TrackingSettings, experiment: str, filter_string: str = "") -> list:
