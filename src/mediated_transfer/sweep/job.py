@@ -22,7 +22,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from ..config.compose import first_line
 from ..config.spec import check_same_run, run_spec
-from ..results import RunResult
+from ..results import DamagedResult, RunResult
+from ..stored.aside import set_aside
 from . import progress, tracking
 from .claim import claimed
 from .identity import run_name, run_tags
@@ -96,8 +97,14 @@ def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
     cfg, folder = job.cfg, job.folder
     if not RunResult.exists(folder):
         return None
-    found = RunResult.read(folder)
-    check_same_run(found, job.spec, folder)
+    try:
+        found = RunResult.read(folder)
+        check_same_run(found, job.spec, folder)
+    except DamagedResult as damaged:
+        moved = set_aside(folder)
+        log.warning("%s: %s; set aside as %s, computing the run again", job.label, damaged,
+                    ", ".join(p.name for p in moved))
+        return None
     stale = found.stale()
     if stale and cfg.rerun_stale:
         return None
