@@ -444,3 +444,20 @@ def test_an_episode_limit_the_world_keeps_ends_episodes_there(kwargs, steps):
         if terminated or truncated:
             break
     assert truncated and taken == steps
+
+
+@pytest.mark.parametrize("task, message", [
+    (Task("ab", (4.0, 3.0), 0.0), "target_position must be 2 numbers \\(x, y\\), got 'ab'"),
+    (Task((12.0,), (4.0, 3.0), 0.0), "target_position must be 2 numbers \\(x, y\\), got \\(12.0,\\)"),
+    (Task((12.0, 0.0, 1.0), (4.0, 3.0, 0.0), 0.0),
+     "target_position must be 2 numbers.*; tool_position must be 2 numbers \\(x, y\\), got \\(4.0, 3.0, 0.0\\)"),
+    (Task((12.0, 0.0), (4.0, 3.0), "a"), "tool_angle must be a number \\(radians\\), got 'a'"),
+    (Task((12.0, True), (4.0, 3.0), 0.0), "target_position must be 2 numbers"),
+])
+def test_a_task_whose_fields_are_not_numbers_names_the_field(task, message):
+    # Not a TypeError, an IndexError or an "overlap" measured on the wrong coordinates.
+    for check in (task.validate, lambda: MediatedInteractionEnv().reset(options={"task": task})):
+        with pytest.raises(ValueError, match=message) as caught:
+            check()
+        assert "\n" not in str(caught.value)
+    assert HAND_BUILT.problems() == [] and Task(np.array([12.0, 0.0]), (4.0, 3.0), np.float64(0.0)).problems() == []
