@@ -171,12 +171,11 @@ def _check_curve(path: Path, record: dict) -> None:
     for number, line in enumerate(lines[1:], start=2):
         parts = line.split(",")
         try:
-            step, reward, rate = int(parts[0]), float(parts[1]), float(parts[2])
             if len(parts) != 3:
-                raise ValueError
-        except (ValueError, IndexError):
+                raise ValueError(line)
+            rows.append((int(parts[0]), float(parts[1]), float(parts[2])))
+        except ValueError:
             raise DamagedResult(path, f"line {number} is not {CURVE_HEADER}: {_short(line)}") from None
-        rows.append((step, reward, rate))
     if len(rows) != len(stored):
         raise DamagedResult(path, f"has {len(rows)} points, {RESULT_FILE} {len(stored)}: cut short or "
                                   "not this run's")

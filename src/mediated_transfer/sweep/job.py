@@ -93,7 +93,8 @@ class _JobRef:
 
 def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
     """(result, "exists", why stale) of a finished run in the job's folder, logged to MLflow
-    from its files unless MLflow has it already; None when the run must be computed."""
+    from its files unless MLflow has it already; None when the run must be computed (a damaged
+    run's files are set aside first, with one warning line)."""
     cfg, folder = job.cfg, job.folder
     if not RunResult.exists(folder):
         return None
