@@ -1,5 +1,6 @@
 """The Gymnasium environment: API, exact observations, action semantics, physics, bad input."""
 
+import importlib.util
 import math
 
 import gymnasium
@@ -404,3 +405,59 @@ def test_invalid_actions_are_rejected(action):
 def test_step_before_reset_is_an_error():
     with pytest.raises(RuntimeError, match="reset"):
         MediatedInteractionEnv().step(PICK_O)
+
+
+def test_a_closed_environment_refuses_to_step_or_reset():
+    env = gymnasium.make(ENV_ID)
+    env.reset(seed=0)
+    env.step(PICK_O)
+    env.close()
+    for call in (lambda: env.step(PICK_O), lambda: env.reset(seed=0)):
+        with pytest.raises(RuntimeError, match="^the environment is closed: make a new one"):
+            call()
+    gymnasium.make(ENV_ID).reset(seed=0)  # a new one works
+
+
+@pytest.mark.skipif(importlib.util.find_spec("pygame") is not None, reason="pygame is installed here")
+def test_human_rendering_without_pygame_is_refused_when_made_not_at_reset():
+    with pytest.raises(ValueError, match="^render_mode='human' shows frames with pygame, which is not installed"):
+        gymnasium.make(ENV_ID, render_mode="human")
+    assert gymnasium.make(ENV_ID, render_mode="rgb_array_list").render_mode == "rgb_array_list"
+
+
+@pytest.mark.parametrize("limit, message", [
+    (-1, r"^max_episode_steps=-1 \(no time limit\) cannot hold: .*max_episode_steps=100 steps"),
+    (500, "^max_episode_steps=500 exceeds the world's own limit, its config's max_episode_steps=100"),
+])
+def test_an_episode_limit_the_world_would_not_keep_is_refused_when_made(limit, message):
+    with pytest.raises(ValueError, match=message):
+        gymnasium.make(ENV_ID, max_episode_steps=limit)
+
+
+@pytest.mark.parametrize("kwargs, steps", [({"max_episode_steps": 30}, 30), ({}, 100),
+                                           ({"max_episode_steps": 150, "config": {"max_episode_steps": 150}}, 150)])
+def test_an_episode_limit_the_world_keeps_ends_episodes_there(kwargs, steps):
+    env = gymnasium.make(ENV_ID, **kwargs)
+    env.reset(seed=0)
+    for taken in range(1, 1000):
+        _, _, terminated, truncated, _ = env.step(PICK_O)  # O is absorbing: nothing ever succeeds
+        if terminated or truncated:
+            break
+    assert truncated and taken == steps
+
+
+@pytest.mark.parametrize("task, message", [
+    (Task("ab", (4.0, 3.0), 0.0), "target_position must be 2 numbers \\(x, y\\), got 'ab'"),
+    (Task((12.0,), (4.0, 3.0), 0.0), "target_position must be 2 numbers \\(x, y\\), got \\(12.0,\\)"),
+    (Task((12.0, 0.0, 1.0), (4.0, 3.0, 0.0), 0.0),
+     "target_position must be 2 numbers.*; tool_position must be 2 numbers \\(x, y\\), got \\(4.0, 3.0, 0.0\\)"),
+    (Task((12.0, 0.0), (4.0, 3.0), "a"), "tool_angle must be a number \\(radians\\), got 'a'"),
+    (Task((12.0, True), (4.0, 3.0), 0.0), "target_position must be 2 numbers"),
+])
+def test_a_task_whose_fields_are_not_numbers_names_the_field(task, message):
+    # Not a TypeError, an IndexError or an "overlap" measured on the wrong coordinates.
+    for check in (task.validate, lambda: MediatedInteractionEnv().reset(options={"task": task})):
+        with pytest.raises(ValueError, match=message) as caught:
+            check()
+        assert "\n" not in str(caught.value)
+    assert HAND_BUILT.problems() == [] and Task(np.array([12.0, 0.0]), (4.0, 3.0), np.float64(0.0)).problems() == []

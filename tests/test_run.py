@@ -120,7 +120,7 @@ def test_evaluation_leaves_the_learner_unchanged():
 
 @pytest.mark.parametrize("changes, message", [
     ({"n_source": 500, "strategy": "regular"}, "exceeds source_pool_size=200"),
-    ({"budget": 601}, "not divisible into eval_points=3"),
+    ({"budget": 601}, "not divisible into scale.eval_points=3"),
     ({"strategy": "curriculum", "n_source": 3}, "allowed: none, regular, scaffolded"),
     ({"strategy": "none", "n_source": 15}, "'none' needs n_source=0"),
     ({"strategy": "regular", "n_source": 0}, "need n_source >= 1"),

@@ -23,6 +23,7 @@ from mediated_transfer.config.compose import CONF_DIR, ConfigError
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.reporting.paper import paper_rows
 from mediated_transfer.results import RunResult
+from mediated_transfer.stored import codec
 
 from .test_tracking import fresh_store
 
@@ -153,6 +154,7 @@ def test_a_folder_holding_another_configuration_is_refused(root, source_cache):
     run_job(cfg, folder)
     stored = json.loads((folder / "result.json").read_text())
     stored["config"]["algorithm"]["lambda_"] = 0.5
+    stored["checksum"] = codec.checksum(stored)  # a genuine record of that other configuration
     (folder / "result.json").write_text(json.dumps(stored))
     with pytest.raises(ConfigError, match=rf"algorithm_params.lambda_: stored 0.5, now {cfg.algorithm.lambda_}"):
         run_job(cfg, folder)
@@ -169,6 +171,7 @@ def test_a_result_recorded_before_the_world_gained_a_key_is_the_same_run(root, s
     run_job(cfg, folder)
     stored = json.loads((folder / "result.json").read_text())
     del stored["config"]["env"]["move_frame"]
+    del stored["checksum"]  # older code wrote none
     (folder / "result.json").write_text(json.dumps(stored))
     run_job(cfg, folder)  # found, not refused
     with pytest.raises(ConfigError, match="world.move_frame: stored 'radial', now 'tool'"):
@@ -219,6 +222,7 @@ def test_a_result_of_other_code_is_reported_stale_and_recomputed_on_request(root
 
     stored = json.loads((folder / "result.json").read_text())
     stored["code"] = {"commit": "0" * 40, "dirty": False, "digest": "0" * 16}  # as if older code wrote it
+    del stored["checksum"]  # older code wrote none
     (folder / "result.json").write_text(json.dumps(stored))
     assert "computed by other code: commit 0000000000" in RunResult.read(folder).stale()
     _run_cli(*args)
@@ -273,6 +277,7 @@ def test_a_sweep_refuses_a_folder_of_another_configuration_before_any_run(root, 
     sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
     stored = json.loads((sweep_dir / "none_0" / "seed=1" / "result.json").read_text())
     stored["config"]["threshold"] = 7.0
+    stored["checksum"] = codec.checksum(stored)  # a genuine record of that other configuration
     (sweep_dir / "none_0" / "seed=1" / "result.json").write_text(json.dumps(stored))
     untouched = (sweep_dir / "none_0" / "seed=0" / "result.json").stat().st_mtime_ns
     with pytest.raises(SystemExit) as error:

@@ -77,11 +77,15 @@ def main(argv: Sequence[str] | None = None) -> Evaluation:
 
 def _last_point(folder: str, result: Evaluation) -> tuple[float, float] | None:
     """The run's recorded last evaluation point, if ``result`` was measured the same way."""
-    from .results import RunResult
+    from .results import DamagedResult, RunResult
 
     if not RunResult.exists(folder):
         return None
-    run = RunResult.read(folder)
+    try:
+        run = RunResult.read(folder)
+    except DamagedResult as damaged:
+        print(f"(no recorded point to compare with: {damaged})", file=sys.stderr)
+        return None
     scale = run.config.get("scale", {}) if run.config else {}
     if not run.mean_reward or (run.seed, scale.get("eval_episodes")) != (result.seed, result.episodes):
         return None

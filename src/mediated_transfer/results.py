@@ -3,7 +3,9 @@
 ``result.json`` holds the run's identity, its resolved config and its metrics;
 ``curve.csv`` holds the evaluation curve (learning step, mean reward <R>, success rate).
 Both are written atomically (temporary file, then rename), so an interrupted run never leaves
-a half-written result that a later sweep would mistake for a finished one.
+a half-written result that a later sweep would mistake for a finished one. How they are encoded
+(strict JSON, a checksum) and judged when read back (a damaged run is named, never used): the
+``stored`` package.
 """
 
 from __future__ import annotations
@@ -19,9 +21,11 @@ import numpy as np
 
 from .atomic import atomic_write_text
 from .metrics import learning_span
+from .stored import CURVE_FILE, CURVE_HEADER, RESULT_FILE
+from .stored.check import DamagedResult, load
+from .stored.codec import encode
 
-RESULT_FILE = "result.json"
-CURVE_FILE = "curve.csv"
+__all__ = ["CURVE_FILE", "RESULT_FILE", "DamagedResult", "RunResult"]
 
 
 @dataclass
@@ -77,19 +81,21 @@ class RunResult:
     def write(self, folder: str | os.PathLike) -> Path:
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
-        lines = ["step,mean_reward,success_rate"]
+        lines = [CURVE_HEADER]
         lines += [f"{s},{r!r},{p!r}" for s, r, p in zip(self.steps, self.mean_reward, self.success_rate)]
         atomic_write_text(folder / CURVE_FILE, "\n".join(lines) + "\n")
         # result.json last: its presence marks the run as finished.
         # Strict JSON: a non-finite number (a diverged learner's statistics, a failed run's
-        # reward loss) is written as null, which every JSON reader accepts.
-        data = _finite_or_null(json.loads(json.dumps(asdict(self), default=_plain)))
-        atomic_write_text(folder / RESULT_FILE, json.dumps(data, indent=2, allow_nan=False) + "\n")
+        # reward loss) is written as null, an infinite config value as "inf" (stored/codec.py).
+        record = json.loads(json.dumps(asdict(self), default=_plain))
+        atomic_write_text(folder / RESULT_FILE, encode(record))
         return folder / RESULT_FILE
 
     @classmethod
     def read(cls, folder: str | os.PathLike) -> "RunResult":
-        data = json.loads((Path(folder) / RESULT_FILE).read_text())
+        """The run stored in ``folder``, validated (stored/check.py); DamagedResult (one line:
+        the file, what is wrong) if it cannot be trusted."""
+        data = load(folder)
         if data.get("reward_loss") is None:  # written as null: not a number
             data["reward_loss"] = math.nan
         return cls(**data)
@@ -109,7 +115,9 @@ class RunResult:
 
     @staticmethod
     def exists(folder: str | os.PathLike) -> bool:
-        return (Path(folder) / RESULT_FILE).is_file()
+        """Whether ``folder`` holds anything under result.json: a finished run, or a damaged one
+        (a folder of that name included) that ``read`` names."""
+        return os.path.lexists(Path(folder) / RESULT_FILE)
 
 
 def _plain(value):
@@ -119,12 +127,3 @@ def _plain(value):
         return value.tolist()
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
-
-def _finite_or_null(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _finite_or_null(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_finite_or_null(v) for v in value]
-    return value

@@ -47,6 +47,10 @@ MAX_SOURCE_POOL = 10**6
 larger pool would take hours in the launcher before any run starts."""
 
 
+_CONFIG_KEYS = {"budget": "scale.budget", "eval_points": "scale.eval_points", "eval_episodes": "scale.eval_episodes"}
+"""RunSpec fields that a config holds under another key: messages name the key a user types."""
+
+
 def _stream_seed(seed: int, stream: int) -> int:
     return int(np.random.SeedSequence([seed, stream]).generate_state(1)[0])
 
@@ -91,6 +95,9 @@ class RunSpec:
 
     def validate(self) -> "RunSpec":
         """Raise a clear error for bad input before any work starts."""
+        from .config.finite import check_finite
+
+        check_finite(self)
         check_learner(self.algorithm, self.representation, self.algorithm_params, self.representation_params,
                       self.algorithm_target, self.representation_target)
         self._check_strategy()
@@ -99,7 +106,7 @@ class RunSpec:
                     "source_pool_size", "source_set_seed"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-                raise ValueError(f"{key} must be an integer, got {value!r}")
+                raise ValueError(f"{_CONFIG_KEYS.get(key, key)} must be an integer, got {value!r}")
         for key in ("seed", "n_source", "source_set_seed"):
             if getattr(self, key) < 0:
                 raise ValueError(f"{key} must be >= 0, got {getattr(self, key)}")
@@ -128,10 +135,10 @@ class RunSpec:
             )
         for key in ("budget", "eval_points", "eval_episodes"):
             if getattr(self, key) < 1:
-                raise ValueError(f"{key} must be >= 1, got {getattr(self, key)}")
+                raise ValueError(f"scale.{key} must be >= 1, got {getattr(self, key)}")
         if self.budget % self.eval_points:
             raise ValueError(
-                f"budget={self.budget} is not divisible into eval_points={self.eval_points} "
+                f"scale.budget={self.budget} is not divisible into scale.eval_points={self.eval_points} "
                 "evenly spaced evaluation points"
             )
         self._check_work()
@@ -180,7 +187,7 @@ class RunSpec:
         # A run far beyond any study's size would look like a hang: refuse it with its size.
         if self.budget > MAX_STEPS:
             raise ValueError(
-                f"budget={self.budget} exceeds {MAX_STEPS:,} learning steps (more than a day "
+                f"scale.budget={self.budget} exceeds {MAX_STEPS:,} learning steps (more than a day "
                 "per run at this project's ~10^4 steps/s); split the study or raise run.MAX_STEPS"
             )
         # Evaluation may run every episode to its truncation: eval_points x eval_episodes x
@@ -188,7 +195,7 @@ class RunSpec:
         worst = self.eval_points * self.eval_episodes * self.world.max_episode_steps
         if worst > MAX_STEPS:
             raise ValueError(
-                f"eval_points={self.eval_points} x eval_episodes={self.eval_episodes} x "
+                f"scale.eval_points={self.eval_points} x scale.eval_episodes={self.eval_episodes} x "
                 f"env.max_episode_steps={self.world.max_episode_steps} = {worst} evaluation steps "
                 f"exceeds {MAX_STEPS:,} (more than a day per run)"
             )

@@ -143,11 +143,14 @@ def _read(path: Path) -> dict[str, Any]:
 def _check_result(folder: Path, spec: "RunSpec", path: Path) -> None:
     """The run's result.json, when there, must be of the learner's configuration."""
     from .config.spec import comparable, run_spec
-    from .results import RunResult
+    from .results import DamagedResult, RunResult
 
     if not RunResult.exists(folder):
         return
-    config = RunResult.read(folder).config
+    try:
+        config = RunResult.read(folder).config
+    except DamagedResult as damaged:  # nothing to check the learner against: not used
+        raise SavedLearnerError(f"{damaged}; rerun the run (its sweep sets the damaged files aside)") from None
     if not config:
         return
     try:

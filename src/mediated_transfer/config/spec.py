@@ -136,13 +136,22 @@ def _plain(node: Any) -> Any:
 
 
 def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
-    """ConfigError naming every difference if ``folder``'s result was computed from another config."""
+    """ConfigError naming every difference if ``folder``'s result was computed from another config;
+    DamagedResult if its recorded config cannot be read as a run."""
     # A folder is named after the cell, the seed and the swept keys; a result computed with
     # other values there (e.g. an override excluded from the folder name) must not be passed
     # off as this run's.
     if not result.config:
         raise ConfigError(f"{folder / 'result.json'} has no recorded config; delete the folder to rerun it")
-    stored = comparable(run_spec(result.config))
+    try:
+        stored = comparable(run_spec(result.config))
+    except ConfigError as error:
+        # e.g. a value earlier code wrote as null (an infinity before it was written as "inf"):
+        # the run cannot be identified, so it cannot be reused; it is set aside, not refused.
+        from ..stored.check import DamagedResult
+
+        raise DamagedResult(folder / "result.json", f"its recorded config is not a run this code "
+                                                    f"can read ({error})") from None
     wanted = comparable(spec)
     # A key added since the run was made is missing from its record: it ran with what the key's
     # default keeps (a new key's default keeps the old behaviour), not with another value. Its

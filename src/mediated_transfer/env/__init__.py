@@ -32,10 +32,14 @@ ENV_ID = "mediated_transfer/MediatedInteraction-v0"
 if ENV_ID not in gymnasium.registry:
     # The episode limit is the paper's 100 steps (WorldConfig.max_episode_steps), declared so
     # that env.spec.max_episode_steps tells learners and wrappers; the environment truncates at
-    # its own config's limit, so a world with another limit needs max_episode_steps= here too.
+    # its own config's limit, so a world with another limit needs max_episode_steps= here too
+    # (a larger one, or -1, is refused: make.check_episode_limit). make.make_env refuses
+    # render_mode="human" without pygame at once.
     gymnasium.register(
-        id=ENV_ID, entry_point="mediated_transfer.env.mediated_env:MediatedInteractionEnv",
+        id=ENV_ID, entry_point="mediated_transfer.env.make:make_env",
         max_episode_steps=WorldConfig.max_episode_steps,
+        additional_wrappers=(gymnasium.envs.registration.WrapperSpec(
+            "check_episode_limit", "mediated_transfer.env.make:check_episode_limit", {}),),
     )
 
 __all__ = [

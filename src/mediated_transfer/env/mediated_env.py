@@ -257,6 +257,15 @@ class MediatedInteractionEnv(gymnasium.Env):
             self._renderer = WorldRenderer(self.config)
         return self._renderer.draw(self.picking_locations, self._active, self._steps)
 
+    def close(self) -> None:
+        """Release the renderer. A closed environment refuses ``step`` and ``reset`` (one line)
+        instead of going on as if nothing happened; make a new one to go on."""
+        self._renderer = None
+        # Instance attributes over the methods, as for move_frame: the per-step path stays as
+        # it is, so no run's code changes by being closable.
+        self.step = self.reset = _closed
+        super().close()
+
     # --- public read-only state (for scripted policies, curricula and plots) --------------------
     @property
     def picking_locations(self) -> np.ndarray:
@@ -427,6 +436,10 @@ class MediatedInteractionEnv(gymnasium.Env):
         observation = self._sensed.copy()
         observation[NUM_DISTANCES + self._active] = 1.0
         return observation
+
+
+def _closed(*args, **kwargs):
+    raise RuntimeError("the environment is closed: make a new one (close() released it)")
 
 
 def _cos_sin(angle: float) -> tuple[float, float]:

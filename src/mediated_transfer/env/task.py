@@ -104,7 +104,9 @@ class Task:
 
     def problems(self, config: WorldConfig = WorldConfig()) -> list[str]:
         """Why this task cannot start an episode (empty when it can)."""
-        out = []
+        out = _field_problems(self)
+        if out:  # the geometry below would fail on them, or measure the wrong thing
+            return out
         if not all(math.isfinite(v) for v in (*self.target_position, *self.tool_position,
                                               self.tool_angle)):
             out.append(f"task coordinates must be finite, got {self.coordinates.tolist()}")
@@ -128,6 +130,21 @@ class Task:
         if problems:
             raise ValueError("invalid task " + repr(self) + ": " + "; ".join(problems))
         return self
+
+
+def _field_problems(task: Task) -> list[str]:
+    """Each field of ``task`` that is not of its kind: a position is 2 real numbers (x, y), the
+    angle one (radians)."""
+    out = [f"{name} must be 2 numbers (x, y), got {value!r}"
+           for name, value in (("target_position", task.target_position), ("tool_position", task.tool_position))
+           if not (isinstance(value, (tuple, list, np.ndarray)) and len(value) == 2 and all(map(_real, value)))]
+    if not _real(task.tool_angle):
+        out.append(f"tool_angle must be a number (radians), got {task.tool_angle!r}")
+    return out
+
+
+def _real(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
 def _uniform_in_annulus(rng: np.random.Generator, r_min: float, r_max: float) -> tuple[float, float]:

@@ -86,9 +86,10 @@ class DQNConfig:
     num_hidden_layers: int = 3
     """Fully connected ReLU layers on the 6 distances (paper: 3)."""
     huber_delta: float = 1.0
-    """The TD error's loss is quadratic inside [-delta, delta] and linear outside."""
+    """The TD error's loss is quadratic inside [-delta, delta] and linear outside; inf: quadratic
+    everywhere (the squared TD error; config/finite.py lets this key be inf)."""
     max_grad_norm: float | None = 10.0
-    """Clip the gradient's global L2 norm to this (SB3 default); None: no clipping."""
+    """Clip the gradient's global L2 norm to this (SB3 default); None or inf: no clipping."""
     adam_beta1: float = 0.9
     """Adam's decay of the gradient mean (torch default)."""
     adam_beta2: float = 0.999

@@ -55,6 +55,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"skipped: {message}", file=sys.stderr)
     for report in reports:
         print(report.line())
+        for line in report.left_out:
+            print(f"  left out: {line}", file=sys.stderr)
         if report.stale:
             print(f"  stale, computed by other code than the current: {'; '.join(report.stale[:3])}"
                   f"{' ...' if len(report.stale) > 3 else ''}; recompute them: rerun the sweep with "

@@ -13,6 +13,7 @@ from __future__ import annotations
 import hashlib
 import re
 import shlex
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -42,13 +43,17 @@ class Report:
     summary_runs: list[str] = field(default_factory=list)
     stale: list[str] = field(default_factory=list)
     """One line per run computed by other code than the current (provenance.py)."""
+    left_out: list[str] = field(default_factory=list)
+    """One line per damaged run left out of the tables (its file, what is wrong)."""
 
     def line(self) -> str:
         """What was built, in one line: experiment, variant, runs, files."""
         files = [*map(str, self.tables), *([str(self.figure)] if self.figure else [])]
         what = f"{self.name} [{self.variant}]" if self.variant else self.name
-        stale = f" ({len(self.stale)} stale)" if self.stale else ""
-        return f"{what}: {self.runs} run{'' if self.runs == 1 else 's'}{stale} -> {', '.join(files)}"
+        notes = [f"{len(self.stale)} stale"] if self.stale else []
+        notes += [f"{len(self.left_out)} damaged left out"] if self.left_out else []
+        notes_text = f" ({', '.join(notes)})" if notes else ""
+        return f"{what}: {self.runs} run{'' if self.runs == 1 else 's'}{notes_text} -> {', '.join(files)}"
 
 
 def build_report(cfg: DictConfig) -> Report:
@@ -63,7 +68,8 @@ def build_report(cfg: DictConfig) -> Report:
         raise ReportError(f"experiment {cfg.name} has no table report section: "
                           f"conf/experiment/{cfg.name}.yaml says how it is reported")
     variant = variant_of(cfg)
-    cells = finished_runs(cfg)
+    left_out: list[str] = []
+    cells = finished_runs(cfg, left_out)
     metrics_cfg = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))
     summaries = cell_summaries(cells, metrics_cfg)
     strategies = {name: (c.strategy, c.n_source) for name, c in cells.items()}
@@ -74,7 +80,7 @@ def build_report(cfg: DictConfig) -> Report:
         title=str(cfg.report.title), scale=str(cfg.scale.name), budget=int(cfg.scale.budget),
         eval_points=int(cfg.scale.eval_points), eval_episodes=int(cfg.scale.eval_episodes),
         runs_per_row=int(cfg.scale.seeds), threshold=metrics_cfg.threshold,
-        max_reward=metrics_cfg.max_reward, variant=variant, stale_runs=len(stale))
+        max_reward=metrics_cfg.max_reward, variant=variant, stale_runs=len(stale), left_out_runs=len(left_out))
     failed = {name: len(c.failed) for name, c in cells.items() if c.failed}
     rows = table_rows(summaries, strategies, paper_rows(str(cfg.report.paper_table)), header.runs_per_row,
                       failed)
@@ -93,25 +99,33 @@ def build_report(cfg: DictConfig) -> Report:
         figure = plot_curves(curves, header.threshold, header.max_reward, title, subtitle,
                              out_dir / f"{cfg.report.figure}.png")
     report = Report(str(cfg.name), tables, figure, sum(len(c.results) for c in cells.values()), variant,
-                    stale=stale)
+                    stale=stale, left_out=left_out)
     if cfg.tracking.enabled:
         report.summary_runs = _log_summaries(cfg, variant, cells, summaries, tables + ([figure] if figure else []))
     return report
 
 
-def finished_runs(cfg: DictConfig) -> dict[str, CellRuns]:
+def finished_runs(cfg: DictConfig, left_out: list[str] | None = None) -> dict[str, CellRuns]:
     """The finished runs of the variant of ``cfg`` by table cell; NoRuns (saying which variants
-    do have runs, and the command that runs this one) when there are none."""
+    do have runs, and the command that runs this one) when there are none. Damaged runs are
+    left out, one line each in ``left_out`` (collect.collect_sweep)."""
     variant = variant_of(cfg)
     sweep_dir = Path(cfg.paths.sweep_dir)
+    damaged: list[str] = []
     cells = collect_sweep(sweep_dir, cfg.algorithm.name, cfg.representation.name, int(cfg.scale.budget),
-                          int(cfg.scale.eval_points), variant, int(cfg.scale.eval_episodes))
+                          int(cfg.scale.eval_points), variant, int(cfg.scale.eval_episodes), damaged)
+    if left_out is None:  # the caller keeps no list: they are named here
+        for line in damaged:
+            print(f"left out: {line}", file=sys.stderr)
+    else:
+        left_out += damaged
     if cells:
         return cells
     present = runs_per_variant(sweep_dir)
     there = ", ".join(f"{variant_label(v)} ({n} run{'' if n == 1 else 's'})" for v, n in present.items())
     what = f"the variant {variant}" if variant else "the baseline"
-    raise NoRuns(f"no runs of {what} in {sweep_dir} (runs there: {there or 'none'}); "
+    also = f"; {len(damaged)} damaged, e.g. {damaged[0]}" if damaged else ""
+    raise NoRuns(f"no runs of {what} in {sweep_dir} (runs there: {there or 'none'}{also}); "
                  f"run the sweep first: {sweep_command(cfg)}")
 
 

@@ -5,17 +5,20 @@ and ``<sweep_dir>/<cell>/seed=<k>/<variant>/result.json`` per finished run of a 
 the variant is Hydra's override_dirname of the run (its overrides besides table cell, seed, scale
 and locations; conf/config.yaml: hydra.sweep.subdir). A report reads one variant only, so the
 baseline and its variants never mix. Unfinished runs have no result.json and are not there yet.
+A damaged run (results.py reads every run validated) is left out and named, one line each:
+tables are built from the runs that can be trusted, and say how many were left out.
 """
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..metrics import MetricsConfig, summarise_runs
-from ..results import RESULT_FILE, RunResult
+from ..results import RESULT_FILE, DamagedResult, RunResult
 
 BASELINE = ""
 """The variant of a sweep run with no overrides beyond table cell, seed and locations."""
@@ -59,8 +62,11 @@ def summaries(cells: dict[str, CellRuns], config: MetricsConfig) -> dict[str, di
 def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
                   representation: str | None = None, budget: int | None = None,
                   eval_points: int | None = None, variant: str = BASELINE,
-                  eval_episodes: int | None = None) -> dict[str, CellRuns]:
+                  eval_episodes: int | None = None, left_out: list[str] | None = None) -> dict[str, CellRuns]:
     """The finished runs of ``variant`` under ``sweep_dir`` by cell name, runs sorted by seed.
+
+    A damaged run is left out: its line (the file, what is wrong) goes into ``left_out``, or,
+    without that list, to stderr.
 
     With ``algorithm``/``representation``/``budget``/``eval_points``/``eval_episodes`` given, a
     run of another learner, budget or evaluation schedule in the folder is an error (it would
@@ -71,9 +77,16 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
     cells: dict[str, CellRuns] = {}
     for seed_dir in sorted(sweep_dir.glob("*/seed=*")):
         folder = seed_dir / variant
-        if not (folder / RESULT_FILE).is_file():
+        if not RunResult.exists(folder):
             continue
-        result = RunResult.read(folder)
+        try:
+            result = RunResult.read(folder)
+        except DamagedResult as damaged:
+            if left_out is None:
+                print(f"left out: {damaged}", file=sys.stderr)
+            else:
+                left_out.append(str(damaged))
+            continue
         expected = {"algorithm": algorithm, "representation": representation, "budget": budget}
         for key, wanted in expected.items():
             if wanted is not None and getattr(result, key) != wanted:

@@ -53,6 +53,8 @@ class TableHeader:
     """The overrides of this sweep (Hydra's override_dirname); '' for the baseline."""
     stale_runs: int = 0
     """Runs computed by other code than the current (provenance.py); said in the header."""
+    left_out_runs: int = 0
+    """Damaged runs left out of the table (reporting.collect); said in the header."""
 
     def heading(self, m: Markup) -> str:
         title = m.text(self.title)
@@ -69,6 +71,10 @@ class TableHeader:
         if self.stale_runs:
             text += (f" {self.stale_runs} of the runs were computed by other code than the current "
                      f"(stale; rerun the sweep with rerun_stale=true to recompute them).")
+        if self.left_out_runs:
+            text += (f" {self.left_out_runs} damaged run{'s were' if self.left_out_runs > 1 else ' was'} "
+                     "left out (the report command names them; rerunning the sweep sets them aside "
+                     "and computes them again).")
         if self.scale != "paper":
             text += (" This is not the paper's scale (500,000 steps, 25 x 100, 20 runs): the "
                      "numbers are not comparable with the paper's.")

@@ -14,7 +14,7 @@ from pathlib import Path
 from omegaconf import DictConfig
 
 from ..config.compose import ConfigError
-from ..results import RunResult
+from ..results import DamagedResult, RunResult
 from ..sweep import _with_seed, _without_seed
 
 
@@ -29,11 +29,15 @@ class PlannedRun:
 
 
 def is_finished(folder: Path, rerun_stale: bool) -> bool:
-    """True when sweep.job.run_job would skip the run in ``folder``: a result is there, and it is not a
-    stale one that ``rerun_stale`` asks to recompute."""
+    """True when sweep.job.run_job would skip the run in ``folder``: a result is there, it is not
+    damaged, and it is not a stale one that ``rerun_stale`` asks to recompute."""
     if not RunResult.exists(folder):
         return False
-    return not (rerun_stale and RunResult.read(folder).stale() is not None)
+    try:
+        found = RunResult.read(folder)
+    except DamagedResult:
+        return False  # its job sets it aside and computes it again
+    return not (rerun_stale and found.stale() is not None)
 
 
 def plan_runs(job_overrides: Sequence[Sequence[str]], initial_index: int,

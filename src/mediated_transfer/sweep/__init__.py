@@ -35,7 +35,7 @@ from omegaconf import DictConfig, OmegaConf
 from ..atomic import atomic_write_text
 from ..config.compose import ConfigError, compose_config, prepare_overrides
 from ..config.spec import check_same_run, run_spec
-from ..results import RunResult
+from ..results import DamagedResult, RunResult
 from .identity import run_where
 
 if TYPE_CHECKING:
@@ -79,10 +79,16 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
         # as a traceback halfway through it.
         folder = sweep_dir / run
         if RunResult.exists(folder):
-            found = RunResult.read(folder)
-            check_same_run(found, replace(specs[_without_seed(job)], seed=int(cfg.seed)), folder)
-            if cfg.rerun_stale and found.stale():
+            try:
+                found = RunResult.read(folder)
+                check_same_run(found, replace(specs[_without_seed(job)], seed=int(cfg.seed)), folder)
+            except DamagedResult:
+                # Its job sets it aside and computes it again (under the run's claim: another
+                # launch may be writing it right now), saying why; it is not finished till then.
                 recompute.setdefault(sweep_dir, []).append(run)
+            else:
+                if cfg.rerun_stale and found.stale():
+                    recompute.setdefault(sweep_dir, []).append(run)
         plans.setdefault(sweep_dir, []).append(run)
         planned.append(_planned(cfg, folder, base))
     _prepare_tracking(base)

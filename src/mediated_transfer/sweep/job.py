@@ -20,7 +20,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from ..config.compose import first_line
 from ..config.spec import check_same_run, run_spec
-from ..results import RunResult
+from ..results import DamagedResult, RunResult
+from ..stored.aside import set_aside
 from . import progress, tracking
 from .claim import claimed
 from .identity import run_name, run_tags
@@ -92,12 +93,19 @@ class _JobRef:
 
 def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
     """(result, "exists", why stale) of a finished run in the job's folder, logged to MLflow
-    from its files unless MLflow has it already; None when the run must be computed."""
+    from its files unless MLflow has it already; None when the run must be computed (a damaged
+    run's files are set aside first, with one warning line)."""
     cfg, folder = job.cfg, job.folder
     if not RunResult.exists(folder):
         return None
-    found = RunResult.read(folder)
-    check_same_run(found, job.spec, folder)
+    try:
+        found = RunResult.read(folder)
+        check_same_run(found, job.spec, folder)
+    except DamagedResult as damaged:
+        moved = set_aside(folder)
+        log.warning("%s: %s; set aside as %s, computing the run again", job.label, damaged,
+                    ", ".join(p.name for p in moved))
+        return None
     stale = found.stale()
     if stale and cfg.rerun_stale:
         return None
