@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import subprocess
 import sys
 import tempfile
@@ -31,7 +32,9 @@ try:
     from mediated_transfer.run import RunSpec
     for kind in kinds:
         a, r, s, *lock = kind.split("/")
-        spec = RunSpec(algorithm=a, representation=r, strategy=s, n_source=0 if s == "none" else 1)
+        s, _, target = s.partition("=")  # a plugin's strategy: name=dotted.path
+        spec = RunSpec(algorithm=a, representation=r, strategy=s, n_source=0 if s == "none" else 1,
+                       strategy_target=target or None)
         out[kind] = [run_digest(spec, bool(lock))]
 except ImportError:  # the whole-file scheme (2): one digest per algorithm, two variants
     from mediated_transfer.provenance import source_digest
@@ -62,14 +65,35 @@ def builtin_kinds() -> list[str]:
     return kinds
 
 
+def plugin_kinds(strategies: list[str]) -> list[str]:
+    """Run kinds of plugin strategies (``name=dotted.path``) with every built-in learner of the
+    project's loop, as single runs (the kind a plugin's sweep runs)."""
+    from ..learners.factory import ALGORITHMS, learner_target
+    from ..plugins import owner_class
+
+    kinds = []
+    for algorithm in ALGORITHMS:
+        cls = owner_class(learner_target(algorithm))
+        for representation in cls.representations:
+            kinds += [f"{algorithm}/{representation}/{strategy}" for strategy in strategies]
+    return kinds
+
+
+def _key(kind: str) -> str:
+    """translations.json's key of a kind: a plugin's strategy by its option name (run_kind)."""
+    a, r, s, *lock = kind.split("/")
+    return "/".join([a, r, s.partition("=")[0], *lock])
+
+
 def digests_now(kinds: list[str]) -> dict[str, str]:
     from ..run import RunSpec
 
     out = {}
     for kind in kinds:
         a, r, s, *lock = kind.split("/")
-        out[kind] = run_digest(RunSpec(algorithm=a, representation=r, strategy=s, n_source=0 if s == "none" else 1),
-                               bool(lock))
+        s, _, target = s.partition("=")
+        out[kind] = run_digest(RunSpec(algorithm=a, representation=r, strategy=s, n_source=0 if s == "none" else 1,
+                                       strategy_target=target or None), bool(lock))
     return out
 
 
@@ -88,10 +112,10 @@ def digests_at(commit: str, kinds: list[str]) -> dict[str, list[str]]:
     return json.loads(out.stdout)
 
 
-def certify(commit: str, why: str) -> dict:
-    kinds = builtin_kinds()
+def certify(commit: str, why: str, plugins: list[str] = ()) -> dict:
+    kinds = builtin_kinds() + plugin_kinds(list(plugins))
     before, now = digests_at(commit, kinds), digests_now(kinds)
-    mapping = {kind: {old: now[kind] for old in before[kind] if old != now[kind]} for kind in kinds}
+    mapping = {_key(kind): {old: now[kind] for old in before[kind] if old != now[kind]} for kind in kinds}
     step = {"why": why, "from_commit": _git("rev-parse", commit), "to_commit": _git("rev-parse", "HEAD"),
             "to_scheme": SCHEME, "map": {k: v for k, v in mapping.items() if v}}
     steps = list(_translations()) + [step]
@@ -104,8 +128,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--from", dest="commit", required=True, help="the commit whose digests to carry over")
     parser.add_argument("--why", required=True, help="why that commit and today's code compute the same")
+    parser.add_argument("--plugin", action="append", default=[], metavar="NAME=TARGET",
+                        help="a plugin strategy's runs to carry over too (its option name and _target_)")
     args = parser.parse_args(argv)
-    step = certify(args.commit, args.why)
+    bad = [p for p in args.plugin if not re.fullmatch(r"\w+=[\w.]+", p)]
+    if bad:
+        parser.error(f"--plugin {bad[0]}: expected NAME=dotted.path.Target")
+    step = certify(args.commit, args.why, args.plugin)
     print(f"{TRANSLATIONS}: step from {step['from_commit'][:10]}: {sum(map(len, step['map'].values()))} "
           f"digests of {len(step['map'])} run kinds carried over")
     return 0

@@ -42,8 +42,10 @@ FIELDS: dict[str, str] = {
     "wall_time_s": "seconds", "learning_steps_per_s": "speed or null",
     "learner_stats": "mapping", "first_target_reward_step": "step or null",
     "config": "mapping", "code": "mapping", "results_format": "count or null", "failure": "text or null",
+    "choices": "mapping or null",
 }
-OPTIONAL = frozenset({"learner_stats", "first_target_reward_step", "config", "code", "results_format", "failure"})
+OPTIONAL = frozenset({"learner_stats", "first_target_reward_step", "config", "code", "results_format", "failure",
+                      "choices"})
 """Keys that records of earlier formats may lack (RunResult's fields with defaults)."""
 
 DEFAULT_SUCCESS_REWARD = 10.0
@@ -216,6 +218,7 @@ _KINDS = {
     "seconds": lambda v: _finite(v) and v >= 0,
     "speed or null": lambda v: v is None or (_finite(v) and v >= 0),  # null: too fast to time
     "mapping": lambda v: isinstance(v, dict),
+    "mapping or null": lambda v: v is None or isinstance(v, dict),
     "count or null": lambda v: v is None or (_is_int(v) and v >= 0),
     "text or null": lambda v: v is None or isinstance(v, str),
 }
@@ -231,6 +234,7 @@ _DESCRIPTIONS = {
     "seconds": "a finite number >= 0",
     "speed or null": "a finite number >= 0 or null",
     "mapping": "an object",
+    "mapping or null": "an object or null",
     "count or null": "an integer >= 0 or null",
     "text or null": "a string or null",
 }
