@@ -3,9 +3,16 @@ learner's option skips, e.g. ``test_run.py::...[dqn-network]`` (tests/optional.p
 
 from __future__ import annotations
 
+import signal
+
 import pytest
 
 from .optional import DEEP, REASON, deep_option
+
+# A suite started in the background (`cmd &` in a script) has SIGINT ignored, and so would every
+# process it starts: the tests that stop a sweep as Ctrl-C does need SIGINT as a terminal has it.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import importlib.util
 import os
 import re
 import shlex
@@ -261,10 +262,29 @@ PLUGIN_CONF = ROOT / "examples" / "plugins" / "my_plugins" / "conf"
 command puts it on the search path, and on the page that documents them."""
 
 
+def searchpath_conf(words: list[str], plugins: bool) -> list[Path]:
+    """The config folders a command puts on Hydra's search path (pkg:// or file://); the worked
+    examples' folder where the page documents them or a command names a path of its own."""
+    folders = [PLUGIN_CONF] if plugins else []
+    for word in words:
+        if not word.startswith("hydra.searchpath="):
+            continue
+        for scheme, where in re.findall(r"(pkg|file)://([^,\]\s'\"]+)", word):
+            if scheme == "file":
+                folders.append(ROOT / where)
+                continue
+            package, *sub = where.split(".")
+            spec = importlib.util.find_spec(package)
+            # the worked examples are a package of their own, installed by the reader
+            home = Path(spec.origin).parent if spec and spec.origin else ROOT / "examples" / "plugins" / package
+            folders.append(home.joinpath(*sub))
+    return folders
+
+
 def override_problems(words: list[str], plugins: bool = False) -> list[str]:
     """Problems of the Hydra overrides among words (a word may hold several, space-separated)."""
     problems = []
-    plugins = plugins or any("hydra.searchpath=" in word for word in words)
+    conf_folders = searchpath_conf(words, plugins)
     for word in words:
         for token in word.split():
             if token.startswith("~") or "=" not in token:
@@ -276,8 +296,7 @@ def override_problems(words: list[str], plugins: bool = False) -> list[str]:
             options = group_options(key)
             if not options:
                 continue
-            if plugins:
-                options = (*options, *(f.stem for f in (PLUGIN_CONF / key).glob("*.yaml")))
+            options = (*options, *(f.stem for c in conf_folders for f in (c / key).glob("*.yaml")))
             values = sweep_values(value)
             if values is None:
                 continue

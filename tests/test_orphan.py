@@ -84,14 +84,22 @@ def _alive(pid: int) -> bool:
         return False
 
 
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads processes from /proc (Linux)")
-@pytest.mark.parametrize("busy", ["busy", "idle"])
+@pytest.mark.parametrize("busy", ["busy", "idle", "busy-in-background"])
 def test_a_pool_worker_exits_within_seconds_of_its_launchers_sigkill(tmp_path, busy):
     """The launcher SIGKILLed: its pool's worker interrupts the job it runs (as Ctrl-C would, so
     the run ends its MLflow run) and exits; an idle one exits at once, instead of waiting for
-    work that never comes (loky: 300 s, multiprocessing's pool: forever)."""
+    work that never comes (loky: 300 s, multiprocessing's pool: forever). In the background
+    (`nohup make ... &` in a script: SIGINT ignored, inherited by the pool) the same."""
     marker = str(tmp_path / "job")
-    launcher = subprocess.Popen([sys.executable, "-c", _POOL_OF_ONE, marker, busy], stdout=subprocess.PIPE, text=True)
+    background = busy.endswith("-in-background")
+    busy = busy.removesuffix("-in-background")
+    launcher = subprocess.Popen([sys.executable, "-c", _POOL_OF_ONE, marker, busy], stdout=subprocess.PIPE, text=True,
+                                preexec_fn=_ignore_sigint if background else None)
     worker = int(launcher.stdout.readline())
     try:
         deadline = time.time() + 60

@@ -174,3 +174,20 @@ def test_every_builtin_kind_has_a_digest():
     assert {"linear_q/rbf/scaffolded", "dqn/network/none/lockstep", "sb3_ppo/fsr/regular"} <= set(kinds)
     digests = digests_now(kinds)
     assert len(set(digests.values())) == len(kinds)  # every kind runs other code
+
+
+def test_a_digest_does_not_depend_on_what_the_process_composed_before():
+    """A config composed with a plugin folder on the search path (what a sweep's worker or a
+    test did before) leaves every run's digest as a fresh process computes it: the folders
+    remembered are process state, not code (found when the suite's order made runs stale)."""
+    from mediated_transfer.config.compose import compose_config, search_dirs
+    from mediated_transfer.provenance import run_roots
+
+    spec = RunSpec(representation="fsr", strategy="scaffolded", n_source=100)
+    compose_config(["tracking=none"])
+    assert search_dirs() == []
+    before = closure_digest(run_roots(spec))
+    compose_config(["tracking=none", "hydra.searchpath=[pkg://auto_curricula.conf]"])
+    assert search_dirs(), "the plugin folder is remembered (the lookup of its options needs it)"
+    assert closure_digest(run_roots(spec)) == before
+    compose_config(["tracking=none"])

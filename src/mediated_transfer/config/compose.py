@@ -121,6 +121,8 @@ def compose_config(overrides: Sequence[str], hydra: bool = False) -> DictConfig:
 
 
 _SEARCH_DIRS: list[Path] = []
+__process_state__ = ("_SEARCH_DIRS",)
+"""What this module remembers of the process, not code: out of every run's code digest."""
 
 
 def _remember_search_dirs(cfg: DictConfig) -> None:

@@ -5,8 +5,9 @@ world), chosen by its config. From each root the digest follows the names the co
 function or class of this project (or of the plugin that holds a root) that a reached function
 names is reached too; a method is reached when some reached code names it as an attribute
 (``x.report(...)`` reaches every reached class's ``report``), dunders always; a module-level
-value a reached function names is part of the digest by its value. Third-party code (numpy,
-torch, pymunk) is not followed: another version of it is not seen.
+value a reached function names is part of the digest by its value (one its module names in
+``__process_state__``, state a process gathers as it goes, by its type alone). Third-party
+code (numpy, torch, pymunk) is not followed: another version of it is not seen.
 
 What a unit contributes is its qualified name and its syntax tree without docstrings, never
 the file it lives in, so moving or renaming a file changes no digest; an unused class, function,
@@ -114,6 +115,8 @@ class Closure:
             elif not isinstance(value, types.ModuleType):
                 for inner in _callables_in(value):
                     pending.append(inner)
+                if _is_process_state(value_name, namespace):
+                    value = type(value)()
                 self.units[(f"{name}:{value_name}", "value")] = _stable_repr(value)
 
     def _local_imports(self, tree: ast.AST, namespace: dict) -> dict[str, Any]:
@@ -209,6 +212,17 @@ def _top(obj: Any) -> str:
     if module == "__main__":
         return "__main__"
     return module.split(".")[0]
+
+
+def _is_process_state(value_name: str, namespace: dict) -> bool:
+    """Whether a module-level value is named in its module's ``__process_state__``: what this
+    process has done so far (the folders the last composed config was searched in), not code.
+    It is digested as its type's empty value, so a run's digest does not depend on what ran
+    before it in the same process (a sweep's worker, a test suite)."""
+    owner, _, attribute = value_name.rpartition(".")
+    module = namespace.get(owner) if owner else None
+    state = getattr(module, "__process_state__", ()) if owner else namespace.get("__process_state__", ())
+    return (attribute or value_name) in state
 
 
 def _module_is_ours(module: Any, packages: set[str]) -> bool:

@@ -59,6 +59,7 @@ def guard() -> Iterator[None]:
             raise KeyboardInterrupt("the launching process is gone")
         _guard.working += 1
         if _guard.thread is None and multiprocessing.parent_process() is not None:
+            _interruptible()
             _guard.thread = threading.Thread(target=_watch, args=(orphaned,), name="launcher-watch", daemon=True)
             _guard.thread.start()
     try:
@@ -66,6 +67,15 @@ def guard() -> Iterator[None]:
     finally:
         with _guard.lock:
             _guard.working -= 1
+
+
+def _interruptible() -> None:
+    """SIGINT raises KeyboardInterrupt in this worker: a launcher started in the background
+    (`nohup cmd &` in a script) passes SIGINT ignored to its pool, and the watch's interrupt
+    would do nothing (the run would compute on until GRACE_S, its MLflow run left RUNNING)."""
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) in (
+            signal.SIG_IGN, signal.SIG_DFL):
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _watch(orphaned: Callable[[], bool]) -> None:
