@@ -187,7 +187,8 @@ def test_learnability_buffers_the_levels_nearest_p_one_half_and_draws_from_it_at
     success = {3.0: 1.0, 4.0: 0.5, 5.0: 0.2, 6.0: 0.0, 7.0: 0.5, None: 0.0}
     for level, p in success.items():
         index = strategy.levels.target if level is None else int(level) - 3
-        strategy.history[index].extend([1.0] * int(10 * p) + [0.0] * (10 - int(10 * p)))
+        for solved in [True] * int(10 * p) + [False] * (10 - int(10 * p)):
+            _report(strategy, index, solved)
     np.testing.assert_allclose(strategy.learnability(), [0, 0.25, 0.16, 0, 0.25, 0])
     assert strategy.buffer().tolist() == [1, 4]
     counts = np.zeros(6)
@@ -200,13 +201,30 @@ def test_learnability_buffers_the_levels_nearest_p_one_half_and_draws_from_it_at
     np.testing.assert_allclose(counts / 6000, expected, atol=0.02)
 
 
+def _report(strategy: Learnability, index: int, solved: bool) -> None:
+    """An episode of level ``index`` reported as if the strategy had handed it out."""
+    strategy.levels._pending = index
+    strategy.report(outcome(None if index == strategy.levels.target else strategy.levels.tasks[index], solved))
+
+
 def test_learnability_estimates_p_from_the_last_window_episodes():
     strategy = Learnability(context(seed=8, n_tasks=1), buffer_size=1, buffer_share=1.0, window=4)
     for solved in (True, True, True, True, False, False):
-        strategy.levels._pending = 0
-        strategy.report(outcome(strategy.levels.tasks[0], solved))
+        _report(strategy, 0, solved)
     assert strategy.learnability()[0] == pytest.approx(0.25)  # last four: 1, 1, 0, 0
     assert strategy.solved_count == 1
+
+
+def test_learnability_is_exactly_the_mean_of_each_levels_window():
+    """The running sums give bit for bit what the mean over each window gives (the committed
+    study runs were computed with the mean), over thousands of outcomes at random levels."""
+    strategy = Learnability(context(seed=9, n_tasks=20), buffer_size=5, buffer_share=0.5, window=10)
+    rng = np.random.default_rng(0)
+    for _ in range(5000):
+        _report(strategy, int(rng.integers(strategy.levels.count)), bool(rng.random() < 0.4))
+        if rng.random() < 0.05:
+            p = np.array([np.mean(h) if h else 0.0 for h in strategy.history])
+            assert np.array_equal(strategy.learnability(), p * (1 - p))
 
 
 # --- what the episodes started from -----------------------------------------------------------

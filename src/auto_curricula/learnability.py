@@ -42,6 +42,10 @@ class Learnability:
         self.buffer_size, self.buffer_share = buffer_size, float(buffer_share)
         self.levels = Levels(context, "learnability")
         self.history = [deque(maxlen=window) for _ in range(self.levels.count)]
+        # Running successes and tries over each level's window: p for all levels in O(levels)
+        # numpy work per episode, not a Python mean per level (the same numbers: sums of 0s and 1s).
+        self.successes = np.zeros(self.levels.count)
+        self.tries = np.zeros(self.levels.count)
 
     @property
     def solved_count(self) -> int:
@@ -49,7 +53,7 @@ class Learnability:
 
     def learnability(self) -> np.ndarray:
         """p (1 - p) per level from its last episodes; 0 for a level not yet tried."""
-        p = np.array([np.mean(h) if h else 0.0 for h in self.history])
+        p = np.divide(self.successes, self.tries, out=np.zeros_like(self.successes), where=self.tries > 0)
         return p * (1 - p)
 
     def buffer(self) -> np.ndarray:
@@ -67,4 +71,11 @@ class Learnability:
         return self.levels.hand_out(index)
 
     def report(self, outcome: EpisodeOutcome) -> None:
-        self.history[self.levels.take(outcome)].append(float(outcome.solved))
+        level = self.levels.take(outcome)
+        history, solved = self.history[level], float(outcome.solved)
+        if len(history) == history.maxlen:
+            self.successes[level] -= history[0]
+            self.tries[level] -= 1
+        history.append(solved)
+        self.successes[level] += solved
+        self.tries[level] += 1
