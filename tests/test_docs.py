@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import functools
 import importlib
-import importlib.util
 import os
 import re
 import shlex
@@ -265,6 +264,8 @@ command puts it on the search path, and on the page that documents them."""
 def searchpath_conf(words: list[str], plugins: bool) -> list[Path]:
     """The config folders a command puts on Hydra's search path (pkg:// or file://); the worked
     examples' folder where the page documents them or a command names a path of its own."""
+    from mediated_transfer.config.compose import _source_dir
+
     folders = [PLUGIN_CONF] if plugins else []
     for word in words:
         if not word.startswith("hydra.searchpath="):
@@ -273,11 +274,8 @@ def searchpath_conf(words: list[str], plugins: bool) -> list[Path]:
             if scheme == "file":
                 folders.append(ROOT / where)
                 continue
-            package, *sub = where.split(".")
-            spec = importlib.util.find_spec(package)
-            # the worked examples are a package of their own, installed by the reader
-            home = Path(spec.origin).parent if spec and spec.origin else ROOT / "examples" / "plugins" / package
-            folders.append(home.joinpath(*sub))
+            # as the config loader finds it; the worked examples are a package the reader installs
+            folders.append(_source_dir("pkg", where) or ROOT / "examples" / "plugins" / where.replace(".", "/"))
     return folders
 
 

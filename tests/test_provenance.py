@@ -187,7 +187,9 @@ def test_a_digest_does_not_depend_on_what_the_process_composed_before():
     compose_config(["tracking=none"])
     assert search_dirs() == []
     before = closure_digest(run_roots(spec))
-    compose_config(["tracking=none", "hydra.searchpath=[pkg://auto_curricula.conf]"])
-    assert search_dirs(), "the plugin folder is remembered (the lookup of its options needs it)"
-    assert closure_digest(run_roots(spec)) == before
-    compose_config(["tracking=none"])
+    try:
+        compose_config(["tracking=none", "hydra.searchpath=[pkg://auto_curricula.conf]"])
+        assert search_dirs(), "the plugin folder is remembered (the lookup of its options needs it)"
+        assert closure_digest(run_roots(spec)) == before
+    finally:  # leave no remembered folder to the tests after this one
+        compose_config(["tracking=none"])

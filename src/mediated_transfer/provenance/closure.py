@@ -219,10 +219,9 @@ def _is_process_state(value_name: str, namespace: dict) -> bool:
     process has done so far (the folders the last composed config was searched in), not code.
     It is digested as its type's empty value, so a run's digest does not depend on what ran
     before it in the same process (a sweep's worker, a test suite)."""
-    owner, _, attribute = value_name.rpartition(".")
-    module = namespace.get(owner) if owner else None
-    state = getattr(module, "__process_state__", ()) if owner else namespace.get("__process_state__", ())
-    return (attribute or value_name) in state
+    owner, _, attribute = value_name.rpartition(".")  # "module.value" or "value"
+    state = getattr(namespace.get(owner), "__process_state__", ()) if owner else namespace.get("__process_state__", ())
+    return attribute in state
 
 
 def _module_is_ours(module: Any, packages: set[str]) -> bool:
