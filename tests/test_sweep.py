@@ -577,7 +577,20 @@ def _shared_users() -> str | None:
     probe = _as_user(SHARE_USERS[0], ["-c", "import mediated_transfer.app"], Path("/tmp"))
     if probe.returncode != 0:
         return f"cannot run the package as {SHARE_USERS[0]} with setpriv: {probe.stderr.strip()[-300:]}"
+    # MLflow's store migrations look for their scripts with os.access, which ignores the read
+    # capability: the environment itself must be readable by the group, as a shared one is.
+    reach = _as_user(SHARE_USERS[0], ["-c", _REACH_MIGRATIONS], Path("/tmp"))
+    if reach.returncode != 0:
+        return (f"{SHARE_USERS[0]} cannot reach this environment's files (a folder on the path of "
+                f"{sys.prefix} is not readable by others, e.g. mktemp's 0700): {reach.stderr.strip()[-200:]}")
     return None
+
+
+_REACH_MIGRATIONS = """
+import os, mlflow.store
+migrations = os.path.join(os.path.dirname(mlflow.store.__file__), "db_migrations")
+assert os.access(migrations, os.R_OK | os.X_OK), migrations
+"""
 
 
 def test_two_users_of_one_group_share_a_sweep_and_its_store():
