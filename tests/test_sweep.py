@@ -581,8 +581,9 @@ def _shared_users() -> str | None:
     # capability: the environment itself must be readable by the group, as a shared one is.
     reach = _as_user(SHARE_USERS[0], ["-c", _REACH_MIGRATIONS], Path("/tmp"))
     if reach.returncode != 0:
+        last = (reach.stderr.strip().splitlines() or [""])[-1]
         return (f"{SHARE_USERS[0]} cannot reach this environment's files (a folder on the path of "
-                f"{sys.prefix} is not readable by others, e.g. mktemp's 0700): {(reach.stderr.strip().splitlines() or [''])[-1]}")
+                f"{sys.prefix} is not readable by others, e.g. mktemp's 0700): {last}")
     return None
 
 
