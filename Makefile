@@ -57,7 +57,7 @@ EXPERIMENTS ?= table2_rbf table3_fsr table4_dnn
 ARGS        ?=
 MLFLOW_PORT ?= 5000
 MLFLOW_DB   ?= mlflow.db
-.PHONY: reproduce-tables reports reproduction dqn-ablation mlflow-ui tune tune-snapshot refine table1 sensitivity curricula slurm-check
+.PHONY: reproduce-tables reports reproduction dqn-ablation mlflow-ui tune tune-snapshot refine table1 sensitivity curricula curricula-dqn slurm-check
 
 # On SLURM (ARGS="hydra/launcher=slurm ..."), every table is queued first (wait=false), then
 # each command again waits for its queued jobs: the tables share their time in the queue.
@@ -120,10 +120,13 @@ sensitivity: $(STAMP) ## Issue 13's pre-registered sensitivity study at SCALE (r
 
 # The curricula are a plugin package (src/auto_curricula) on the config search path, as a user's.
 CURRICULA_PATH := 'hydra.searchpath=[pkg://auto_curricula.conf]'
-CURRICULA_LEARNERS ?= rbf fsr
 
-curricula: $(STAMP) ## Issue 35's pre-registered curricula study at SCALE, both learners (resumable sweeps), then reports/CURRICULA.md
-	@for learner in $(CURRICULA_LEARNERS); do \
-		$(BIN)/python -m mediated_transfer experiment=curricula representation=$$learner $(CURRICULA_PATH) scale=$(SCALE) $(ARGS) || exit 1; \
-	done
+curricula: $(STAMP) ## Issue 42's pre-registered curricula study at SCALE: the linear sweep (resumable), then reports/CURRICULA.md
+	$(BIN)/python -m mediated_transfer experiment=curricula2 $(CURRICULA_PATH) scale=$(SCALE) $(ARGS)
+	$(BIN)/python -m mediated_transfer.curricula scale=$(SCALE) $(CURRICULA_PATH) $(ARGS)
+
+curricula-dqn: $(STAMP) ## The study's DQN arms (the registered rule picks two curricula from the linear runs), then the report
+	cells=$$($(BIN)/python -m mediated_transfer.curricula --dqn-cells scale=$(SCALE) $(CURRICULA_PATH) $(ARGS)) && \
+	$(BIN)/python -m mediated_transfer experiment=curricula2_dqn $(CURRICULA_PATH) scale=$(SCALE) \
+		hydra.sweeper.params.cell=$$cells $(ARGS)
 	$(BIN)/python -m mediated_transfer.curricula scale=$(SCALE) $(CURRICULA_PATH) $(ARGS)

@@ -184,7 +184,7 @@ def test_command_line_builds_the_named_experiments(tmp_path, capsys):
     assert code == 0
     assert "table2_rbf: 5 runs" in capsys.readouterr().out
     assert (tmp_path / "reports" / "smoke" / "table2_rbf.md").is_file()
-    with pytest.raises(SystemExit, match="allowed: curricula, dqn_failure_ablation, sensitivity, table2_rbf, table3_fsr, table4_dnn"):
+    with pytest.raises(SystemExit, match="allowed: curricula, curricula2, curricula2_dqn, dqn_failure_ablation, sensitivity, table2_rbf, table3_fsr, table4_dnn"):
         reporting_main(["experiment=table9"])
 
 

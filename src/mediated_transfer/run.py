@@ -317,7 +317,7 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     td_signal = wants_td_error(strategy)
     env = MediatedInteractionEnv("target", world)
     curve = Curve(spec, streams, on_evaluation)
-    choices = EpisodeChoices(curve.every, spec.eval_points)
+    choices = EpisodeChoices(curve.every, spec.eval_points, world.mediated_min_distance)
     progress_every = progress_every or curve.every
 
     source_phase_end: int | None = None

@@ -1,9 +1,12 @@
 """``python -m mediated_transfer.curricula [overrides]``: reports/CURRICULA.md, its tables
-(reports/curricula/curricula_<learner>.csv) and figures, from the runs of
-``python -m mediated_transfer experiment=curricula representation=<rbf|fsr>
-'hydra.searchpath=[pkg://auto_curricula.conf]'`` with the same overrides (scale, paths.root,
-and e.g. hydra.sweeper.params.seed=3000 or representation=fsr for a smaller check). `make
-curricula` runs the sweeps and this."""
+(reports/curricula/curricula_<learner>_<world>*.csv) and figures, from the runs of
+``python -m mediated_transfer experiment=curricula2 'hydra.searchpath=[pkg://auto_curricula.conf]'``
+with the same overrides (scale, paths.root, and e.g. hydra.sweeper.params.seed=4000,
+representation=fsr or env=default for a smaller check), and the first study's superseded
+numbers from its committed runs. `make curricula` runs the sweep and this.
+
+``--dqn-cells`` prints the cells of the DQN's sweep that the registered rule picks
+(`make curricula-dqn` runs it)."""
 
 from __future__ import annotations
 
@@ -11,8 +14,9 @@ import sys
 from pathlib import Path
 
 from ..reporting.compose import USER_ERRORS, one_line
-from .report import write_report
-from .study import load_study
+from .report import collect, dqn_cells, write_report
+from .study import load_first_study, load_study
+from .superseded import superseded_section
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -21,11 +25,17 @@ def main(argv: list[str] | None = None) -> int:
         print(__doc__)
         return 0
     try:
-        unknown = [a for a in args if a.startswith("--")]
+        unknown = [a for a in args if a.startswith("--") and a != "--dqn-cells"]
         if unknown:
-            raise ValueError(f"unknown option {unknown[0]}; this command takes only Hydra overrides")
-        study = load_study(args)
-        paths = write_report(study, Path(study.config.paths.reports_dir),
+            raise ValueError(f"unknown option {unknown[0]}; this command takes --dqn-cells and Hydra overrides")
+        overrides = [a for a in args if a != "--dqn-cells"]
+        study = load_study(overrides)
+        if "--dqn-cells" in args:
+            print(",".join(dqn_cells(study)))
+            return 0
+        first = load_first_study(overrides)
+        superseded = superseded_section(first, collect(first)[0], float(first.config.threshold))
+        paths = write_report(study, Path(study.config.paths.reports_dir), superseded,
                              progress=lambda line: print(line, file=sys.stderr))
     except USER_ERRORS as error:
         raise SystemExit(f"error: {one_line(error)}") from None

@@ -1,5 +1,6 @@
-"""The curricula study's figures: every arm's mean learning curve per learner, and what each
-arm's episodes started from over the run (the target distance, and the share of target tasks)."""
+"""The curricula study's figures: every arm's mean learning curve per group (a learner in a
+world), and what each arm's episodes started from over the run (the target distance, and the
+exposure: the share of episodes on target-annulus tasks)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,10 @@ from .study import NONE, PAPER_ARMS
 
 LABELS = {"none_0": "without transfer", "regular_100": "regular, N=100", "scaffolded_100": "scaffolded, N=100",
           "dr_0": "domain randomisation", "reverse_0": "reverse curriculum", "plr_100": "PLR over C",
-          "learnability_100": "learnability over C"}
+          "learnability_100": "learnability over C", "plr_annulus_100": "PLR over C + annulus levels",
+          "sfl_0": "SFL (generator)", "alp_gmm_0": "ALP-GMM", "currot_0": "CURROT",
+          "plr_handover_100": "PLR order of C, hand-over",
+          "learnability_handover_100": "learnability order of C, hand-over"}
 
 
 def label(cell: str) -> str:
@@ -29,10 +33,12 @@ def _style(cell: str) -> dict:
 
 def plot_curves(runs: dict[str, dict[str, Sequence[RunResult]]], threshold: float, max_reward: float,
                 path: Path) -> Path:
-    """One panel per learner: each arm's mean <R> over its runs, ± s.e.m., against learning steps."""
+    """One panel per group: each arm's mean <R> over its runs, ± s.e.m., against learning steps."""
     plt = _pyplot()
-    fig, axes = plt.subplots(1, len(runs), figsize=(6.2 * len(runs), 4.4), sharey=True, squeeze=False)
-    for ax, (learner, arms) in zip(axes[0], runs.items()):
+    columns = min(len(runs), 2)
+    rows = -(-len(runs) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(6.2 * columns, 4.4 * rows), sharey=True, squeeze=False)
+    for ax, (group, arms) in zip(axes.flat, runs.items()):
         for cell, results in arms.items():
             if not results:
                 continue
@@ -43,12 +49,12 @@ def plot_curves(runs: dict[str, dict[str, Sequence[RunResult]]], threshold: floa
             line, = ax.plot(steps, mean, label=f"{label(cell)} ({len(results)})", **_style(cell))
             ax.fill_between(steps, mean - spread, mean + spread, color=line.get_color(), alpha=0.12)
         ax.axhline(threshold, color="grey", linewidth=0.8, linestyle=":")
-        ax.set_title(f"linear Q(λ) + {learner.upper()}")
+        ax.set_title(f"linear Q(λ) + {group}")
         ax.set_xlabel("learning steps")
         ax.set_ylim(0, max_reward * 1.02)
         ax.grid(alpha=0.3)
-    axes[0][0].set_ylabel("<R> on target tasks (mean ± s.e.m. over runs)")
-    axes[0][-1].legend(fontsize=8, loc="lower right")
+        ax.set_ylabel("<R> on target tasks (mean ± s.e.m.)")
+    axes[0][-1].legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -57,15 +63,16 @@ def plot_curves(runs: dict[str, dict[str, Sequence[RunResult]]], threshold: floa
 
 def plot_choices(runs: dict[str, dict[str, Sequence[RunResult]]], reach: float,
                  target_distances: tuple[float, float], path: Path) -> Path:
-    """Rows: learners; columns: the arms with a curriculum (not ``none_0``, whose episodes are all
+    """Rows: groups; columns: the arms with a curriculum (not ``none_0``, whose episodes are all
     target tasks). Each panel: the median over runs of the started tasks' median target distance
-    per evaluation interval, the runs' mean 10-90 % band, and (right axis) the share of target
-    tasks, against learning steps."""
+    per evaluation interval, the runs' mean 10-90 % band, and (right axis) the exposure, the
+    share of episodes on target-annulus tasks (a record from before that column: the share of
+    the environment's target tasks), against learning steps."""
     plt = _pyplot()
     cells = [c for c in next(iter(runs.values())) if c != NONE]
     fig, axes = plt.subplots(len(runs), len(cells), figsize=(2.9 * len(cells), 2.7 * len(runs)),
                              sharex=True, sharey=True, squeeze=False)
-    for row, (learner, arms) in enumerate(runs.items()):
+    for row, (group, arms) in enumerate(runs.items()):
         for col, cell in enumerate(cells):
             ax = axes[row][col]
             recorded = [r for r in arms.get(cell, ()) if r.choices]
@@ -82,18 +89,19 @@ def plot_choices(runs: dict[str, dict[str, Sequence[RunResult]]], reach: float,
                                 np.nanmean(column("distance_q90"), axis=0), color="tab:blue", alpha=0.2)
                 ax.plot(bins, np.nanmedian(column("distance_median"), axis=0), color="tab:blue")
                 share = ax.twinx()
-                share.plot(bins, np.nanmean(column("target_share"), axis=0), color="tab:red", linewidth=1)
+                exposure = "annulus_share" if "annulus_share" in recorded[0].choices else "target_share"
+                share.plot(bins, np.nanmean(column(exposure), axis=0), color="tab:red", linewidth=1)
                 share.set_ylim(0, 1.02)
                 share.tick_params(labelsize=7, colors="tab:red")
             if row == 0:
                 ax.set_title(label(cell), fontsize=9)
             if col == 0:
-                ax.set_ylabel(f"{learner.upper()}: target distance", fontsize=8)
+                ax.set_ylabel(f"{group}:\ntarget distance", fontsize=8)
             if row == len(runs) - 1:
                 ax.set_xlabel("learning steps", fontsize=8)
             ax.tick_params(labelsize=7)
     fig.suptitle("What the episodes started from: target distance (blue: median, 10-90 %), reach (dotted), "
-                 "target annulus (shaded); share of target tasks (red, right axis)", fontsize=9)
+                 "target annulus (shaded); exposure, the share of episodes on annulus tasks (red, right axis)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -1,5 +1,6 @@
-"""What the curricula study measures per arm, and its registered decision rule
-(conf/experiment/curricula.yaml), from the runs' results. Intervals are the reproduction
+"""What the curricula studies measure per arm, and their registered decision rules
+(conf/experiment/curricula2.yaml; the first study's, curricula.yaml, are the same words), from
+the runs' results. Intervals are the reproduction
 report's own (reporting/intervals.py: percentile bootstrap, runs resampled within each arm)."""
 
 from __future__ import annotations
@@ -41,6 +42,14 @@ class ArmMeasures:
     """Runs whose strategy said it was done (C solved; the reverse curriculum at the annulus)."""
     done_median: float | None
     """Median learning step at which it did (a run where it never did counts as later)."""
+    exposure_median: float | None
+    """Median over runs of the share of training episodes on target-annulus tasks (exposure)."""
+    exposure_counts_all: bool
+    """The exposure counts every annulus episode; False: a record from before annulus_share,
+    which counts only the environment's target tasks (a curriculum's own annulus tasks read 0)."""
+    annulus_solved_median: float | None
+    """Median learning step by which a run first solved an annulus task, whoever drew it (the end
+    of the first evaluation interval with one; never counts as later)."""
 
 
 @dataclass(frozen=True)
@@ -67,7 +76,38 @@ def arm_measures(cell: str, runs: Sequence[RunResult], failed: int, threshold: f
         discovery_median=median_time([r.first_target_reward_step for r in runs]),
         learning_median=median_time([r.learning_span(threshold) for r in runs]),
         done_runs=sum(r.source_phase_end is not None for r in runs),
-        done_median=median_time([r.source_phase_end for r in runs]))
+        done_median=median_time([r.source_phase_end for r in runs]),
+        exposure_median=_median([exposure(r) for r in runs]),
+        exposure_counts_all=all("annulus_share" in (r.choices or {}) for r in runs),
+        annulus_solved_median=median_time([first_annulus_success(r) for r in runs]))
+
+
+def _median(values: Sequence[float | None]) -> float | None:
+    known = [v for v in values if v is not None]
+    return float(np.median(known)) if known else None
+
+
+def exposure(run: RunResult) -> float | None:
+    """The share of the run's training episodes whose target lay in the target annulus, whoever
+    drew the task (result.json choices ``annulus_share``); a record from before that column gives
+    its environment-drawn target tasks' share (``target_share``). None: no record."""
+    choices = run.choices or {}
+    episodes = np.array(choices.get("episodes") or [], dtype=float)
+    share = choices.get("annulus_share", choices.get("target_share"))
+    if share is None or episodes.sum() == 0:
+        return None
+    share = np.array([0.0 if v is None else v for v in share], dtype=float)
+    return float((share * episodes).sum() / episodes.sum())
+
+
+def first_annulus_success(run: RunResult) -> int | None:
+    """The end of the first evaluation interval in which the run solved an annulus task (None:
+    never, or no record of it)."""
+    choices = run.choices or {}
+    for b, solved in enumerate(choices.get("annulus_solved") or []):
+        if solved:
+            return (b + 1) * int(choices["every"])
+    return None
 
 
 def word(interval: tuple[float, float, float]) -> str:
@@ -107,11 +147,32 @@ def time_ratio(runs: Sequence[RunResult], reference_runs: Sequence[RunResult], t
 
 
 def verdict(words: dict[str, list[str]]) -> tuple[str, dict[str, str]]:
-    """The registered verdict from each learner's words against the scaffolding: per learner
-    YES when a curriculum beats it, NO otherwise; overall YES when YES for either learner."""
-    per_learner = {learner: "YES" if BEATS in w else "NO" for learner, w in words.items()}
-    overall = "YES" if "YES" in per_learner.values() else "NO"
-    return overall, per_learner
+    """The registered verdict from each group's (a learner, in a world) words against the
+    scaffolding: per group YES when an arm beats it, NO otherwise; overall YES when YES for any."""
+    per_group = {group: "YES" if BEATS in w else "NO" for group, w in words.items()}
+    overall = "YES" if "YES" in per_group.values() else "NO"
+    return overall, per_group
+
+
+def dqn_picks(ratios: dict[str, dict[str, float]], order: Sequence[str], count: int = 2) -> list[str]:
+    """The registered rule for the DQN's curricula: the ``count`` curricula of lowest geometric
+    mean of r_S over the groups given (RBF and FSR in the default world); ties in ``order``.
+    ``ratios``: group -> curriculum -> r_S (mean L_R over scaffolded's)."""
+    def score(cell: str) -> float:
+        values = [group[cell] for group in ratios.values() if cell in group]
+        return float(np.exp(np.mean(np.log(values)))) if len(values) == len(ratios) else math.inf
+    ranked = sorted((c for c in order if math.isfinite(score(c))), key=lambda c: (score(c), order.index(c)))
+    return ranked[:count]
+
+
+def exposure_correlation(exposures: Sequence[float], losses: Sequence[float]) -> float | None:
+    """Secondary: Spearman's rank correlation of the arms' median exposure and mean L_R."""
+    from scipy.stats import spearmanr
+
+    if len(exposures) < 3 or len(set(exposures)) < 2 or len(set(losses)) < 2:
+        return None  # undefined for a constant input
+    rho = spearmanr(exposures, losses).statistic
+    return None if not np.isfinite(rho) else float(rho)
 
 
 def steps_text(value: float | None) -> str:

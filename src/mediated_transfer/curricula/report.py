@@ -1,6 +1,7 @@
-"""reports/CURRICULA.md: the curricula study's verdict, tables and figures, built from its runs
-by the registered rule (measures.py). The section between READING_START and READING_END is
-written by a person after reading the results and is kept when the report is rebuilt."""
+"""reports/CURRICULA.md: the curricula study's verdicts, tables and figures, built from its runs
+by the registered rules (measures.py), and the first study's numbers in a superseded section
+(superseded.py). The section between READING_START and READING_END is written by a person after
+reading the results and is kept when the report is rebuilt."""
 
 from __future__ import annotations
 
@@ -17,77 +18,77 @@ from ..reporting.collect import collect_sweep
 from ..reporting.formats import write_csv
 from ..reporting.intervals import format_interval
 from .figures import label, plot_choices, plot_curves
-from .measures import arm_measures, compare, steps_text, time_ratio, verdict
-from .study import EXPERIMENT, REGULAR, SCAFFOLDED, Study
+from .measures import (arm_measures, compare, dqn_picks, exposure_correlation, steps_text, time_ratio, verdict)
+from .study import DEFAULT_WORLD, REGULAR, SCAFFOLDED, Study
 
 REPORT = "CURRICULA.md"
 READING_START = "<!-- reading: written by hand, kept when the report is rebuilt -->"
 READING_END = "<!-- /reading -->"
 
 
-def collect(study: Study) -> dict[str, dict[str, list]]:
-    """learner -> arm -> its finished runs (registered seeds only), and the failed ones apart."""
+def collect(study: Study) -> tuple[dict[str, dict[str, list]], dict[str, dict[str, int]]]:
+    """group -> arm -> its finished runs (registered seeds only), and the failed ones' counts."""
     runs, failed = {}, {}
-    for learner in study.learners:
-        cfg = learner.config
-        cells = collect_sweep(learner.sweep_dir, str(cfg.algorithm.name), learner.representation,
-                              int(cfg.scale.budget), int(cfg.scale.eval_points), learner.variant,
+    for group in study.groups:
+        cfg = group.config
+        cells = collect_sweep(group.sweep_dir, str(cfg.algorithm.name), group.representation,
+                              int(cfg.scale.budget), int(cfg.scale.eval_points), group.variant,
                               int(cfg.scale.eval_episodes))
-        runs[learner.representation] = {c: [r for r in cells[c].results if r.seed in study.seeds]
-                                        if c in cells else [] for c in study.cells}
-        failed[learner.representation] = {c: len(cells[c].failed) if c in cells else 0 for c in study.cells}
+        runs[group.name] = {c: [r for r in cells[c].results if r.seed in study.seeds] if c in cells else []
+                            for c in study.cells}
+        failed[group.name] = {c: len(cells[c].failed) if c in cells else 0 for c in study.cells}
     return runs, failed
 
 
-def learner_table(study: Study, arms: dict[str, list], failed: dict[str, int],
-                  threshold: float) -> pd.DataFrame:
-    """The learner's measures, one row per arm."""
+def measures_table(study: Study, arms: dict[str, list], failed: dict[str, int], threshold: float) -> pd.DataFrame:
+    """One group's measures, one row per arm."""
     rows = []
     for cell in study.cells:
-        results = arms[cell]
-        if not results:
+        if not arms[cell]:
             rows.append({"Arm": label(cell), "Runs": f"0/{len(study.seeds)}"})
             continue
-        m = arm_measures(cell, results, failed[cell], threshold)
+        m = arm_measures(cell, arms[cell], failed[cell], threshold)
+        exposure = "-" if m.exposure_median is None else f"{m.exposure_median:.3f}"
         rows.append({
             "Arm": label(cell), "Runs": f"{m.runs}/{len(study.seeds)}" + (f" ({m.failed} failed)" if m.failed else ""),
             "L_R": f"{m.reward_loss_mean:.2f} ± {m.reward_loss_sem:.2f}", "L_R IQM": f"{m.reward_loss_iqm:.2f}",
+            "Exposure (median)": exposure if m.exposure_counts_all else f"≥ {exposure}",
             "Time to threshold": steps_text(m.mean_curve_time),
             "Per-run median (reached)": f"{steps_text(m.per_run_time_median)} ({m.reached}/{m.runs})",
             "Never learn": m.never_learn,
+            "Annulus first solved (median)": steps_text(m.annulus_solved_median) if m.exposure_counts_all else "-",
             "Discovery (median)": steps_text(m.discovery_median),
-            "Learning span (median)": steps_text(m.learning_median),
-            "Done (median, runs)": f"{steps_text(m.done_median)} ({m.done_runs})" if m.done_runs else "-",
+            "Hand-over (median, runs)": f"{steps_text(m.done_median)} ({m.done_runs})" if m.done_runs else "-",
         })
     return pd.DataFrame(rows).fillna("")
 
 
-def decision_table(study: Study, arms: dict[str, list], threshold: float,
-                   budget: int) -> tuple[pd.DataFrame, dict[str, str]]:
-    """Each curriculum against scaffolded and regular transfer by the registered rule, and its
-    word against the scaffolding."""
-    rows, words = [], {}
-    for cell in study.curricula:
+def decision_table(study: Study, arms: dict[str, list], cells: tuple[str, ...], threshold: float,
+                   budget: int) -> tuple[pd.DataFrame, dict[str, str], dict[str, float]]:
+    """Each of ``cells`` against scaffolded and regular transfer by the registered rule; its word
+    and its r_S (for the DQN's picks) against the scaffolding."""
+    rows, words, ratios = [], {}, {}
+    for cell in cells:
         if not arms[cell]:
             continue
-        row = {"Curriculum": label(cell)}
+        row = {"Arm": label(cell)}
         for reference, column in ((SCAFFOLDED, "scaffolded"), (REGULAR, "regular")):
             if arms.get(reference):
                 c = compare(cell, arms[cell], reference, arms[reference])
                 row[f"L_R / {column} [95 % CI]"] = format_interval(c.ratio)
                 row[f"vs {column}"] = f"**{c.word}**"
                 if reference == SCAFFOLDED:
-                    words[cell] = c.word
+                    words[cell], ratios[cell] = c.word, c.ratio[0]
         if arms.get(SCAFFOLDED):
             row["Time to threshold / scaffolded (secondary)"] = format_interval(
                 time_ratio(arms[cell], arms[SCAFFOLDED], threshold, budget))
         rows.append(row)
-    return pd.DataFrame(rows).fillna(""), words
+    return pd.DataFrame(rows).fillna(""), words, ratios
 
 
-def registration() -> str:
+def registration(experiment: str) -> str:
     """The commit that added the study's experiment file (its pre-registration), if git knows it."""
-    path = CONF_DIR / "experiment" / f"{EXPERIMENT}.yaml"
+    path = CONF_DIR / "experiment" / f"{experiment}.yaml"
     try:
         out = subprocess.run(["git", "log", "--diff-filter=A", "--format=%h (%cs)", "--", str(path)],
                              cwd=CONF_DIR, capture_output=True, text=True, timeout=30).stdout.split()
@@ -96,92 +97,167 @@ def registration() -> str:
     return " ".join(out[-2:]) if out else "its first commit"
 
 
-def write_report(study: Study, reports_dir: Path, progress=print) -> list[Path]:
+def write_report(study: Study, reports_dir: Path, superseded: str = "", progress=print) -> list[Path]:
     cfg = study.config
     threshold, budget = float(cfg.threshold), int(cfg.scale.budget)
-    max_reward = float(cfg.env.success_reward)
     runs, failed = collect(study)
     out_dir = reports_dir / "curricula"
     out_dir.mkdir(parents=True, exist_ok=True)
-    tables, decisions, words = {}, {}, {}
-    for learner in runs:
-        progress(f"curricula: measuring {learner} ({sum(len(v) for v in runs[learner].values())} runs)")
-        tables[learner] = learner_table(study, runs[learner], failed[learner], threshold)
-        decisions[learner], words[learner] = decision_table(study, runs[learner], threshold, budget)
-    paths = [write_csv(table, out_dir / f"curricula_{learner}.csv") for learner, table in tables.items()]
-    paths += [write_csv(table, out_dir / f"curricula_{learner}_decision.csv") for learner, table in decisions.items()]
+    parts: dict[str, dict] = {}
+    for group, arms in runs.items():
+        progress(f"curricula: measuring {group} ({sum(len(v) for v in arms.values())} runs)")
+        q1, w1, r1 = decision_table(study, arms, study.curricula, threshold, budget)
+        q2, w2, _ = decision_table(study, arms, study.handovers, threshold, budget)
+        parts[group] = {"measures": measures_table(study, arms, failed[group], threshold), "q1": q1, "q2": q2,
+                        "w1": w1, "w2": w2, "r1": r1}
+    paths = []
+    for group, part in parts.items():
+        stem = group.lower().replace(", ", "_")
+        paths += [write_csv(part[k], out_dir / f"curricula_{stem}{suffix}.csv")
+                  for k, suffix in (("measures", ""), ("q1", "_q1"), ("q2", "_q2")) if not part[k].empty]
     space = TaskSpace()
-    paths.append(plot_curves(runs, threshold, max_reward, out_dir / "curricula_curves.png"))
+    paths.append(plot_curves(runs, threshold, float(cfg.env.success_reward), out_dir / "curricula_curves.png"))
     paths.append(plot_choices(runs, space.reach, space.target_distances, out_dir / "curricula_choices.png"))
     report = reports_dir / REPORT
-    atomic_write_text(report, render(study, tables, decisions, words, runs, _kept_reading(report)))
+    atomic_write_text(report, render(study, parts, runs, _kept_reading(report), superseded))
     return [report, *paths]
 
 
-def render(study: Study, tables: dict[str, pd.DataFrame], decisions: dict[str, pd.DataFrame],
-           words: dict[str, dict[str, str]],
-           runs: dict[str, dict[str, list]], reading: str) -> str:
+def _verdict_lines(question: str, words: dict[str, dict[str, str]]) -> list[str]:
+    overall, per_group = verdict({group: list(w.values()) for group, w in words.items()})
+    lines = [f"**{question}** **{overall}** ({'; '.join(f'{g}: {v}' for g, v in per_group.items())}).", ""]
+    lines += [f"- {group}: " + (", ".join(f"{label(c)} {v}" for c, v in w.items()) or "no runs yet") + "."
+              for group, w in words.items()]
+    return lines + [""]
+
+
+def render(study: Study, parts: dict[str, dict], runs: dict[str, dict[str, list]], reading: str,
+           superseded: str) -> str:
     cfg = study.config
-    overall, per_learner = verdict({learner: list(w.values()) for learner, w in words.items()})
-    complete = all(len(arm) == len(study.seeds) for arms in runs.values() for arm in arms.values())
+    expected = len(study.seeds) * len(study.cells) * len(study.groups)
+    done = sum(len(arm) for arms in runs.values() for arm in arms.values())
     seeds = f"{study.seeds[0]}-{study.seeds[-1]}" if len(study.seeds) > 1 else str(study.seeds[0])
     lines = [
-        "# The field's automatic curricula against the paper's scaffolding",
+        "# Automatic curricula against the paper's scaffolding: a fair test",
         "",
-        f"Pre-registered in `conf/experiment/{EXPERIMENT}.yaml` ({registration()}), before its first run: "
-        "arms, learners, seeds, measures and the decision rule. Built by `make curricula` "
-        "(`python -m mediated_transfer.curricula`) from the runs under "
-        f"`{Path(cfg.paths.multirun_dir).name}/curricula_<learner>/{cfg.scale.name}/`. Scale `{cfg.scale.name}`: "
+        f"Pre-registered in `conf/experiment/{study.experiment}.yaml` ({registration(study.experiment)}), before its "
+        "first run: questions, arms, learners, worlds, seeds, measures, the decision rules and the rule that "
+        "picks the DQN's arms. Built by `make curricula` (`python -m mediated_transfer.curricula`) from the runs "
+        f"under `{Path(cfg.paths.multirun_dir).name}/{study.experiment}/{cfg.scale.name}/`. Scale `{cfg.scale.name}`: "
         f"{int(cfg.scale.budget):,} learning steps per run, {int(cfg.scale.eval_points)} evaluation points of "
-        f"{int(cfg.scale.eval_episodes)} target-task episodes; seeds {seeds} (not the tables' or the tuning's); "
-        "learners with Table I's values. The curricula are plugins (`src/auto_curricula`, docs/curricula.md).",
+        f"{int(cfg.scale.eval_episodes)} target-task episodes; seeds {seeds} (fresh); learners with Table I's "
+        "values; every curriculum in the setting its own paper assumes (docs/curricula.md). The first study's "
+        "verdict is withdrawn: see [Superseded](#superseded-the-first-study).",
         "",
     ]
-    if not complete:
-        lines += ["**Incomplete:** not every arm has all its runs yet; the verdict below is provisional.", ""]
+    if done < expected:
+        lines += [f"**Incomplete: {done} of {expected} runs.** The verdicts below are provisional: they are the "
+                  "registered rule applied to the runs there are, and may change as the sweep completes.", ""]
+    lines += ["## Verdicts", ""]
+    lines += _verdict_lines("Q1: does any automatic curriculum, in its own setting, beat the paper's scaffolding?",
+                            {g: p["w1"] for g, p in parts.items()})
+    lines += _verdict_lines("Q2: does a feedback curriculum's order of C, with the paper's hand-over, beat "
+                            "Algorithm 2's order?", {g: p["w2"] for g, p in parts.items()})
     lines += [
-        "## Verdict",
+        "The registered rule: an arm *beats* scaffolded transfer (N_source = 100) for a learner in a world when "
+        "the 95 % bootstrap interval of its mean L_R over scaffolded's lies entirely below 1, is *worse* when it "
+        "lies entirely above 1, and is *undecided* otherwise; the same words against regular transfer.",
         "",
-        f"**Does any automatic curriculum beat the paper's scaffolding?** **{overall}** "
-        f"({'; '.join(f'{k.upper()}: {v}' for k, v in per_learner.items())}).",
-        "",
-        "The registered rule: a curriculum *beats* scaffolded transfer (N_source = 100) for a learner when "
-        "the 95 % bootstrap interval of its mean L_R over scaffolded's lies entirely below 1, is *worse* "
-        "when it lies entirely above 1, and is *undecided* otherwise; the same against regular transfer.",
-        "",
+        READING_START, reading.strip() or "(to be written after reading the results)", READING_END, "",
+        "## Exposure beside L_R", "",
+        "Exposure: the median over runs of the share of a run's training episodes whose target lay in the "
+        "target annulus (the evaluated tasks), whoever drew the task. The first study ranked its arms in "
+        "exactly the order of this share.", "",
+        _markdown(_exposure_table(study, parts)), "",
     ]
-    for learner, w in words.items():
-        lines.append(f"- {learner.upper()}: " + ", ".join(f"{label(c)} {v}" for c, v in w.items()) + ".")
-    lines += ["", READING_START, reading.strip() or "(to be written after reading the results)", READING_END, ""]
-    for learner, table in tables.items():
-        lines += [f"## Linear Q(λ) + {learner.upper()}", "", _markdown(decisions[learner]), "", _markdown(table), ""]
+    correlations = _correlations(study, parts)
+    if correlations:
+        lines += ["Spearman's rank correlation of median exposure and mean L_R over a group's arms (secondary): "
+                  + "; ".join(correlations) + ".", ""]
+    lines += _dqn_lines(study, parts)
+    for group, part in parts.items():
+        lines += [f"## Linear Q(λ) + {group}", ""]
+        for key in ("q1", "q2"):
+            if not part[key].empty:
+                lines += [_markdown(part[key]), ""]
+        lines += [_markdown(part["measures"]), ""]
     lines += [
         "L_R: mean ± s.e.m. over runs (0 best, 250 worst); IQM: interquartile mean. Time to threshold: of the "
         f"arm's mean curve, the first evaluation step from which <R> >= {float(cfg.threshold):g} to the end "
         "(the paper's); per run: the median, a run that never gets there counting as slower than any that does. "
-        "Never learn: no evaluation point at the threshold. Discovery: learning step of the first rewarded "
-        "target-task episode (one the environment sampled from the target scenario; a curriculum's own tasks "
-        "in the annulus do not count); learning span: from there to the first evaluation point at the "
-        "threshold. Ratios: 95 % percentile bootstrap intervals, 10,000 resamples (reporting/intervals.py). "
-        "Time / scaffolded is secondary, outside the rule (a mean curve that never stays above the threshold "
-        "counts as the budget: a bound). Done: the learning step at which the strategy handed over to target "
-        "tasks for good (regular and scaffolded: C solved; the reverse curriculum: a start in the annulus "
-        "reached R_min); the others never are.",
+        "Never learn: no evaluation point at the threshold. Annulus first solved: the end of the first evaluation "
+        "interval in which the run solved an annulus task, whoever drew it. Discovery: the first rewarded "
+        "episode of a target task the environment drew. Hand-over: the learning step at which the strategy "
+        "gave over to target tasks for good. Ratios: 95 % percentile bootstrap intervals, 10,000 resamples "
+        "(reporting/intervals.py). Budget: every arm 500k learning steps, every environment step a learning "
+        "step (SFL's scoring episodes are training episodes). Tuning: the learners' Table I values (tuned "
+        "without transfer); the curricula's values from their papers, none tuned here.",
         "",
-        "## Learning curves",
-        "",
-        "![every arm's mean curve](curricula/curricula_curves.png)",
-        "",
-        "## What each curriculum chose",
-        "",
-        "![the target distance of the episodes each arm started](curricula/curricula_choices.png)",
+        "## Learning curves", "", "![every arm's mean curve](curricula/curricula_curves.png)", "",
+        "## What each curriculum chose", "",
+        "![the target distance of the episodes each arm started, and its exposure](curricula/curricula_choices.png)",
         "",
         "Per evaluation interval of each run (result.json `choices`): the target distance of the tasks the "
-        "episodes started from, and the share of target tasks. Regular and scaffolded transfer draw from C "
-        "until it is solved, then target tasks only.",
-        "",
+        "episodes started from, and the exposure (the share of episodes on target-annulus tasks).", "",
     ]
+    if superseded:
+        lines += [superseded, ""]
     return "\n".join(lines)
+
+
+def _exposure_table(study: Study, parts: dict[str, dict]) -> pd.DataFrame:
+    """Arms as rows, one column per group: 'L_R (exposure)'."""
+    frame = pd.DataFrame({"Arm": [label(c) for c in study.cells]})
+    for group, part in parts.items():
+        measures = part["measures"].set_index("Arm")
+        frame[group] = [f"{measures.at[label(c), 'L_R'].split(' ')[0]} ({measures.at[label(c), 'Exposure (median)']})"
+                        if "L_R" in measures and isinstance(measures.at[label(c), "L_R"], str)
+                        and measures.at[label(c), "L_R"] else "-" for c in study.cells]
+    return frame
+
+
+def _correlations(study: Study, parts: dict[str, dict]) -> list[str]:
+    out = []
+    for group, part in parts.items():
+        m = part["measures"]
+        if "Exposure (median)" not in m:
+            continue
+        rows = m[m["L_R"].astype(str).str.len() > 0]
+        exposure = [float(str(e).lstrip("≥ ")) for e in rows["Exposure (median)"] if str(e) not in ("", "-")]
+        losses = [float(str(v).split(" ")[0]) for v in rows["L_R"]]
+        rho = exposure_correlation(exposure, losses) if len(exposure) == len(losses) else None
+        if rho is not None:
+            out.append(f"{group} {rho:+.2f} ({len(losses)} arms)")
+    return out
+
+
+def _picks(study: Study, parts: dict[str, dict]) -> list[str]:
+    """The registered rule's two curricula for the DQN, from RBF's and FSR's r_S in the default world."""
+    ratios = {g: p["r1"] for g, p in parts.items() if g.endswith(f", {DEFAULT_WORLD}")}
+    return dqn_picks(ratios, study.curricula) if len(ratios) == 2 else []
+
+
+def dqn_cells(study: Study) -> list[str]:
+    """The DQN sweep's cells: none_0, scaffolded_100 and the two picked curricula. ValueError
+    while the linear runs cannot pick them."""
+    runs, _ = collect(study)
+    cfg = study.config
+    parts = {g: {"r1": decision_table(study, arms, study.curricula, float(cfg.threshold),
+                                      int(cfg.scale.budget))[2]} for g, arms in runs.items()}
+    picks = _picks(study, parts)
+    if len(picks) < 2:
+        raise ValueError("the DQN's curricula cannot be picked yet: the rule needs RBF's and FSR's default-world "
+                         "runs of the curricula and of scaffolded_100")
+    return ["none_0", SCAFFOLDED, *picks]
+
+
+def _dqn_lines(study: Study, parts: dict[str, dict]) -> list[str]:
+    picks = _picks(study, parts)
+    if not picks:
+        return ["The DQN's two curricula (the registered rule: lowest geometric mean of r_S over RBF and FSR in "
+                "the default world) cannot be picked yet.", ""]
+    return [f"**The DQN's arms** by the registered rule (lowest geometric mean of r_S over RBF and FSR in the "
+            f"default world): none_0, scaffolded_100, {picks[0]} and {picks[1]} (`make curricula-dqn`).", ""]
 
 
 def _markdown(frame: pd.DataFrame) -> str:
