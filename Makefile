@@ -128,5 +128,5 @@ curricula: $(STAMP) ## Issue 42's pre-registered curricula study at SCALE: the l
 curricula-dqn: $(STAMP) ## The study's DQN arms (the registered rule picks two curricula from the linear runs), then the report
 	cells=$$($(BIN)/python -m mediated_transfer.curricula --dqn-cells scale=$(SCALE) $(CURRICULA_PATH) $(ARGS)) && \
 	$(BIN)/python -m mediated_transfer experiment=curricula2_dqn $(CURRICULA_PATH) scale=$(SCALE) \
-		hydra.sweeper.params.cell=$$cells $(ARGS)
+		cell=$$cells $(ARGS)
 	$(BIN)/python -m mediated_transfer.curricula scale=$(SCALE) $(CURRICULA_PATH) $(ARGS)

@@ -15,8 +15,20 @@ from pathlib import Path
 
 from ..reporting.compose import USER_ERRORS, one_line
 from .report import collect, dqn_cells, write_report
-from .study import load_first_study, load_study
+from .study import DQN_EXPERIMENT, NONE, SCAFFOLDED, Study, load_first_study, load_study
 from .superseded import superseded_section
+
+
+def dqn_study(study: Study, overrides: list[str]) -> Study:
+    """The DQN's arms: its file's cells and, once the linear runs pick them, the two curricula."""
+    kept = [o for o in overrides if o.startswith(("scale=", "paths.", "tracking=", "hydra.searchpath",
+                                                  "hydra.sweeper.params.seed"))]
+    dqn = load_study(kept, DQN_EXPERIMENT, (NONE, SCAFFOLDED))
+    try:
+        cells = tuple(dict.fromkeys(dqn.cells + tuple(dqn_cells(study))))
+    except ValueError:  # not picked yet
+        cells = dqn.cells
+    return Study(dqn.experiment, dqn.groups, cells, dqn.seeds)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -35,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         first = load_first_study(overrides)
         superseded = superseded_section(first, collect(first)[0], float(first.config.threshold))
-        paths = write_report(study, Path(study.config.paths.reports_dir), superseded,
+        paths = write_report(study, Path(study.config.paths.reports_dir), superseded, dqn_study(study, overrides),
                              progress=lambda line: print(line, file=sys.stderr))
     except USER_ERRORS as error:
         raise SystemExit(f"error: {one_line(error)}") from None

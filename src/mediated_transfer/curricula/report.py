@@ -19,7 +19,7 @@ from ..reporting.formats import write_csv
 from ..reporting.intervals import format_interval
 from .figures import label, plot_choices, plot_curves
 from .measures import (arm_measures, compare, dqn_picks, exposure_correlation, steps_text, time_ratio, verdict)
-from .study import DEFAULT_WORLD, REGULAR, SCAFFOLDED, Study
+from .study import DEFAULT_WORLD, NONE, REGULAR, SCAFFOLDED, Study
 
 REPORT = "CURRICULA.md"
 READING_START = "<!-- reading: written by hand, kept when the report is rebuilt -->"
@@ -97,10 +97,14 @@ def registration(experiment: str) -> str:
     return " ".join(out[-2:]) if out else "its first commit"
 
 
-def write_report(study: Study, reports_dir: Path, superseded: str = "", progress=print) -> list[Path]:
+def write_report(study: Study, reports_dir: Path, superseded: str = "", dqn: Study | None = None,
+                 progress=print) -> list[Path]:
+    """The report of ``study`` (the linear groups), its DQN arms' section from ``dqn`` where
+    they have runs, and the first study's ``superseded`` section."""
     cfg = study.config
     threshold, budget = float(cfg.threshold), int(cfg.scale.budget)
     runs, failed = collect(study)
+    dqn_section = _dqn_section(dqn, threshold, budget) if dqn is not None else ""
     out_dir = reports_dir / "curricula"
     out_dir.mkdir(parents=True, exist_ok=True)
     parts: dict[str, dict] = {}
@@ -119,8 +123,25 @@ def write_report(study: Study, reports_dir: Path, superseded: str = "", progress
     paths.append(plot_curves(runs, threshold, float(cfg.env.success_reward), out_dir / "curricula_curves.png"))
     paths.append(plot_choices(runs, space.reach, space.target_distances, out_dir / "curricula_choices.png"))
     report = reports_dir / REPORT
-    atomic_write_text(report, render(study, parts, runs, _kept_reading(report), superseded))
+    atomic_write_text(report, render(study, parts, runs, _kept_reading(report), "\n\n".join(
+        part for part in (dqn_section, superseded) if part)))
     return [report, *paths]
+
+
+def _dqn_section(dqn: Study, threshold: float, budget: int) -> str:
+    """The DQN's arms (conf/experiment/curricula2_dqn.yaml): its measures and each picked
+    curriculum against scaffolded_100 by the registered rule; empty while it has no runs."""
+    runs, failed = collect(dqn)
+    (group, arms), = runs.items()
+    if not any(arms.values()):
+        return ""
+    curricula = tuple(c for c in dqn.cells if c not in (NONE, SCAFFOLDED))
+    decision, words, _ = decision_table(dqn, arms, curricula, threshold, budget)
+    lines = [f"## DQN, {dqn.groups[0].world} world (the registered rule's arms)", ""]
+    lines += _verdict_lines("Q1 for the DQN: does a picked curriculum beat the scaffolding?", {"DQN": words})
+    if not decision.empty:
+        lines += [_markdown(decision), ""]
+    return "\n".join(lines + [_markdown(measures_table(dqn, arms, failed[group], threshold))])
 
 
 def _verdict_lines(question: str, words: dict[str, dict[str, str]]) -> list[str]:

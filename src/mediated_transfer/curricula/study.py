@@ -67,7 +67,8 @@ class Study:
         return self.groups[0].config
 
 
-def load_study(overrides: Sequence[str] = (), experiment: str = EXPERIMENT) -> Study:
+def load_study(overrides: Sequence[str] = (), experiment: str = EXPERIMENT,
+               references: tuple[str, ...] = PAPER_ARMS) -> Study:
     """The study of conf/experiment/<experiment>.yaml with ``overrides`` (those its sweep ran with:
     scale, paths.root, hydra.sweeper.params.seed=4000 for a smaller check, representation=fsr or
     env=default for one group). ConfigError in one line if they do not compose."""
@@ -88,8 +89,8 @@ def load_study(overrides: Sequence[str] = (), experiment: str = EXPERIMENT) -> S
         cfg = compose_config(own + fixed + named, hydra=True)
         groups.append(Group(str(cfg.representation.name), world or DEFAULT_WORLD, cfg,
                             Path(cfg.paths.sweep_dir), variant_of(cfg)))
-    if not all(arm in cells for arm in PAPER_ARMS):
-        raise ValueError(f"conf/experiment/{experiment}.yaml must sweep cell over {', '.join(PAPER_ARMS)}: "
+    if not all(arm in cells for arm in references):
+        raise ValueError(f"conf/experiment/{experiment}.yaml must sweep cell over {', '.join(references)}: "
                          "the curricula are measured against them")
     return Study(experiment, tuple(groups), tuple(cells), tuple(sorted({int(job["seed"]) for job in jobs})))
 
