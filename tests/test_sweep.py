@@ -204,7 +204,8 @@ def test_submitit_local_launcher_runs_the_jobs(root, source_cache):
 
 
 def test_a_sweep_over_any_n_source_runs(root, source_cache):
-    _run_cli("-m", "strategy=regular,scaffolded", "n_source=7", "hydra/launcher=basic", "tracking=none",
+    # -m among the overrides, as README and docs/extending.md write it (not only first)
+    _run_cli("strategy=regular,scaffolded", "-m", "n_source=7", "hydra/launcher=basic", "tracking=none",
              *_common(root, source_cache))
     sweep_dir = root / "multirun" / "linear_q_rbf" / "smoke"
     assert set(_results(sweep_dir)) == {"regular_7/seed=0", "scaffolded_7/seed=0"}

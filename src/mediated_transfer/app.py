@@ -43,7 +43,9 @@ def cli(argv: Sequence[str] | None = None) -> Any:
     from hydra._internal.utils import get_args_parser
 
     args = sys.argv[1:] if argv is None else list(argv)
-    parsed = get_args_parser().parse_args(args)
+    # Intermixed: `experiment=x -m cell=...` as documented (flags among the overrides); Hydra
+    # then reads the flags first (sys.argv is rebuilt below).
+    parsed = get_args_parser().parse_intermixed_args(args)
     runs: list = []
     try:
         with interrupted.sigterm_interrupts():
