@@ -9,6 +9,8 @@
 
 from __future__ import annotations
 
+import json
+import shutil
 import subprocess
 import sys
 import time
@@ -16,9 +18,12 @@ from pathlib import Path
 
 import pytest
 
-from mediated_transfer.results import RunResult
+from mediated_transfer.reporting.__main__ import main as reporting_main
+from mediated_transfer.results import CURVE_FILE, RESULT_FILE, RunResult
+from mediated_transfer.slurm.jobs import is_finished
+from mediated_transfer.stored.aside import SUFFIX
 
-from .test_sweep import _run_cli
+from .test_sweep import _run_cli, source_cache  # noqa: F401 - source_cache: the session's fixture
 
 pytestmark = pytest.mark.slow
 
@@ -90,3 +95,49 @@ def test_two_sweeps_of_different_configurations_in_one_folder_at_once_are_named(
     assert RunResult.read(folder).representation == "rbf"
     assert (folder / ".claim").read_text() == ""  # a free claim records nobody
 
+
+def _args(root: Path, cache: Path) -> list[str]:
+    return ["experiment=table3_fsr", "scale=smoke", "tracking=none", f"paths.root={root}", f"paths.cache_dir={cache}"]
+
+
+def test_a_run_folder_holding_another_cells_run_is_set_aside_recomputed_and_left_out(tmp_path, source_cache,
+                                                                                     capsys):
+    root = tmp_path
+    sweep = ["-m", "cell=none_0,regular_1", "seed=0", "hydra/launcher=basic", *_args(root, source_cache)]
+    _run_cli(*sweep)
+    sweep_dir = root / "multirun" / "table3_fsr" / "smoke"
+    folder, other = sweep_dir / "none_0" / "seed=0", sweep_dir / "regular_1" / "seed=0"
+    own = json.loads((folder / RESULT_FILE).read_text())
+    for name in (RESULT_FILE, CURVE_FILE):  # regular_1's run copied into none_0's folder
+        shutil.copy(other / name, folder / name)
+    copied = (folder / RESULT_FILE).read_bytes()
+    untouched = (other / RESULT_FILE).stat().st_mtime_ns
+    capsys.readouterr()
+    said = (f"{folder / RESULT_FILE}: holds the run regular_1 seed=0, not this folder's none_0 seed=0: "
+            "moved or copied here")
+
+    # The report leaves it out and names it (before: "the folder does not match its content").
+    assert reporting_main(_args(root, source_cache)) == 0
+    out, err = capsys.readouterr()
+    assert "table3_fsr: 1 run (1 damaged left out) -> " in out
+    assert [line.strip() for line in err.splitlines() if "left out: " in line] == [f"left out: {said}"]
+    assert not is_finished(folder, rerun_stale=False, place=("none_0", 0))  # the launchers compute it
+    assert is_finished(other, rerun_stale=False, place=("regular_1", 0))
+
+    # The sweep sets it aside and computes the folder's own run (before: refused in preflight).
+    _run_cli(*sweep)
+    aside = {p.name.split(SUFFIX)[0]: p for p in folder.iterdir() if SUFFIX in p.name}
+    assert {RESULT_FILE, CURVE_FILE} <= set(aside)
+    assert aside[RESULT_FILE].read_bytes() == copied  # kept, renamed, not deleted
+    again = RunResult.read(folder)
+    assert (again.strategy, again.n_source, again.seed) == ("none", 0, 0)
+    assert again.mean_reward == own["mean_reward"]
+    assert (other / RESULT_FILE).stat().st_mtime_ns == untouched  # regular_1's own run reused
+    log = (folder / "mediated_transfer.log").read_text()
+    [line] = [line for line in log.splitlines() if "set aside as" in line]
+    assert said in line and "computing the run again" in line
+
+    capsys.readouterr()
+    assert reporting_main(_args(root, source_cache)) == 0
+    out, err = capsys.readouterr()
+    assert "table3_fsr: 2 runs -> " in out and "left out" not in err

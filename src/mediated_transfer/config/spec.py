@@ -137,7 +137,12 @@ def _plain(node: Any) -> Any:
 
 def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
     """ConfigError naming every difference if ``folder``'s result was computed from another config;
-    DamagedResult if its recorded config cannot be read as a run."""
+    DamagedResult if it is another cell's or seed's run (moved or copied there) or its recorded
+    config cannot be read as a run."""
+    from ..stored.check import check_place
+
+    # Another cell's or seed's run is not this folder's run at all: set aside, not refused.
+    check_place(folder, result, f"{spec.strategy}_{spec.n_source}", spec.seed)
     # A folder is named after the cell, the seed and the swept keys; a result computed with
     # other values there (e.g. an override excluded from the folder name) must not be passed
     # off as this run's.
