@@ -55,3 +55,24 @@ def test_a_claim_file_follows_the_umask_so_that_a_group_can_share_it(tmp_path):
         finally:
             os.umask(previous)
         assert stat.S_IMODE((tmp_path / oct(umask) / CLAIM_FILE).stat().st_mode) == 0o666 & ~umask
+
+
+def test_a_held_claim_records_its_holder_and_a_free_one_nobody(tmp_path):
+    import json
+    import os
+    import socket
+
+    from mediated_transfer.sweep.claim import holder
+
+    with claimed(tmp_path, {"sweep": "s", "config": {"a": 1}}) as mine:
+        assert mine
+        found = holder(tmp_path)
+        assert found is not None and found["pid"] == os.getpid()
+        assert found["record"] == {"sweep": "s", "config": {"a": 1}}
+    assert holder(tmp_path, wait_s=0) is None  # emptied on release
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()
+    # A holder killed before it could empty the file: its record is not taken for a live holder's.
+    (tmp_path / CLAIM_FILE).write_text(json.dumps({"pid": gone.pid, "host": socket.gethostname(),
+                                                   "record": {"config": {"a": 2}}}))
+    assert holder(tmp_path, wait_s=0) is None

@@ -47,17 +47,29 @@ def test_plan_composes_once_per_cell_and_sets_each_seed(tmp_path):
 
 
 def test_finished_runs_are_not_submitted_but_stale_ones_are_when_recomputed(tmp_path, monkeypatch):
-    stale = {"b/seed=0"}
+    stale = {"b_1/seed=0"}
     monkeypatch.setattr(jobs.RunResult, "read", staticmethod(lambda folder: SimpleNamespace(
-        stale=lambda: "other code" if Path(folder).relative_to(tmp_path).as_posix() in stale else None)))
-    _finish(tmp_path / "a/seed=0")
-    _finish(tmp_path / "b/seed=0")
-    for rerun_stale, submitted in ((False, ["a/seed=1"]), (True, ["a/seed=1", "b/seed=0"])):
+        stale=lambda: "other code" if Path(folder).relative_to(tmp_path).as_posix() in stale else None,
+        **_run_of(Path(folder)))))
+    _finish(tmp_path / "a_1/seed=0")
+    _finish(tmp_path / "b_1/seed=0")
+    _finish(tmp_path / "b_1/seed=1")
+    (tmp_path / "b_1/seed=1/result.json").write_text('{"moved": "from a_1/seed=0"}')  # another cell's run
+    for rerun_stale, submitted in ((False, ["a_1/seed=1", "b_1/seed=1"]),
+                                   (True, ["a_1/seed=1", "b_1/seed=0", "b_1/seed=1"])):
         runs = [jobs.PlannedRun((), i, _cfg(tmp_path, c, s, rerun_stale), tmp_path / f"{c}/seed={s}")
-                for i, (c, s) in enumerate([("a", 0), ("a", 1), ("b", 0)])]
+                for i, (c, s) in enumerate([("a_1", 0), ("a_1", 1), ("b_1", 0), ("b_1", 1)])]
         finished, pending = jobs.split_finished(runs)
         assert [r.folder.relative_to(tmp_path).as_posix() for r in pending] == submitted
-        assert len(finished) + len(pending) == 3
+        assert len(finished) + len(pending) == 4
+
+
+def _run_of(folder: Path) -> dict:
+    """The cell and seed of the run a fake result.json holds: its folder's, unless it says it was moved."""
+    moved = json.loads((folder / "result.json").read_text()).get("moved")
+    cell, seed = (moved or f"{folder.parent.name}/{folder.name}").split("/")
+    strategy, n_source = cell.rsplit("_", 1)
+    return {"strategy": strategy, "n_source": int(n_source), "seed": int(seed.removeprefix("seed="))}
 
 
 def test_is_finished_agrees_with_run_job_skipping(tmp_path, monkeypatch):

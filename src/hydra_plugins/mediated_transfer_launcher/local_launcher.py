@@ -64,13 +64,13 @@ class MediatedJoblibLauncher(JoblibLauncher):
         from joblib import Parallel, delayed
 
         from mediated_transfer.lockstep.launch import lockstep_groups
-        from mediated_transfer.slurm.jobs import is_finished
+        from mediated_transfer.slurm.jobs import is_finished, place_of
 
         assert self.config is not None and self.hydra_context is not None
         groups = lockstep_groups(
             job_overrides, lambda o: self.hydra_context.config_loader.load_sweep_config(self.config, o),
             lambda cfg: is_finished(Path(str(cfg.hydra.sweep.dir)) / str(cfg.hydra.sweep.subdir),
-                                    bool(cfg.rerun_stale)))
+                                    bool(cfg.rerun_stale), place_of(cfg)))
         if all(len(g) == 1 for g in groups):
             return super().launch(job_overrides, initial_job_idx)
         setup_globals()

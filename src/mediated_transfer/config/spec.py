@@ -137,7 +137,12 @@ def _plain(node: Any) -> Any:
 
 def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
     """ConfigError naming every difference if ``folder``'s result was computed from another config;
-    DamagedResult if its recorded config cannot be read as a run."""
+    DamagedResult if it is another cell's or seed's run (moved or copied there) or its recorded
+    config cannot be read as a run."""
+    from ..stored.check import check_place
+
+    # Another cell's or seed's run is not this folder's run at all: set aside, not refused.
+    check_place(folder, result, f"{spec.strategy}_{spec.n_source}", spec.seed)
     # A folder is named after the cell, the seed and the swept keys; a result computed with
     # other values there (e.g. an override excluded from the folder name) must not be passed
     # off as this run's.
@@ -160,17 +165,24 @@ def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
         if isinstance(stored.get(group), dict) and isinstance(wanted.get(group), dict):
             stored[group] = {**{k: v for k, v in wanted[group].items() if k not in stored[group]},
                              **stored[group]}
-    differ = sorted(k for k in wanted if stored.get(k) != wanted[k])
-    if differ:
-        detail = "; ".join(_difference(k, stored.get(k), wanted[k]) for k in differ)
+    detail = differences(stored, wanted)
+    if detail:
         raise ConfigError(
             f"{folder} holds a finished run of another configuration ({detail}). Use another "
             "paths.root, or delete the folder to recompute it."
         )
 
 
-def _difference(key: str, stored: Any, wanted: Any) -> str:
+def differences(stored: Mapping[str, Any], wanted: Mapping[str, Any],
+                labels: tuple[str, str] = ("stored", "now")) -> str:
+    """Every key of ``wanted`` where ``stored`` (two ``comparable`` configs) differs, one clause each
+    (``algorithm_params.lambda_: stored 0.5, now 0.9``); "" when there is none."""
+    differ = sorted(k for k in wanted if stored.get(k) != wanted[k])
+    return "; ".join(_difference(k, stored.get(k), wanted.get(k), labels) for k in differ)
+
+
+def _difference(key: str, stored: Any, wanted: Any, labels: tuple[str, str]) -> str:
     if isinstance(stored, dict) and isinstance(wanted, dict):
         keys = sorted(k for k in set(stored) | set(wanted) if stored.get(k) != wanted.get(k))
-        return ", ".join(f"{key}.{k}: stored {stored.get(k)!r}, now {wanted.get(k)!r}" for k in keys)
-    return f"{key}: stored {stored!r}, now {wanted!r}"
+        return ", ".join(_difference(f"{key}.{k}", stored.get(k), wanted.get(k), labels) for k in keys)
+    return f"{key}: {labels[0]} {stored!r}, {labels[1]} {wanted!r}"

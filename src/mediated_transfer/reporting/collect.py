@@ -5,7 +5,8 @@ and ``<sweep_dir>/<cell>/seed=<k>/<variant>/result.json`` per finished run of a 
 the variant is Hydra's override_dirname of the run (its overrides besides table cell, seed, scale
 and locations; conf/config.yaml: hydra.sweep.subdir). A report reads one variant only, so the
 baseline and its variants never mix. Unfinished runs have no result.json and are not there yet.
-A damaged run (results.py reads every run validated) is left out and named, one line each:
+A damaged run (results.py reads every run validated), or another cell's or seed's run moved or
+copied into a folder (stored/check.py: check_place), is left out and named, one line each:
 tables are built from the runs that can be trusted, and say how many were left out.
 """
 
@@ -19,6 +20,7 @@ import numpy as np
 
 from ..metrics import MetricsConfig, summarise_runs
 from ..results import RESULT_FILE, DamagedResult, RunResult
+from ..stored.check import check_place
 
 BASELINE = ""
 """The variant of a sweep run with no overrides beyond table cell, seed and locations."""
@@ -65,8 +67,9 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
                   eval_episodes: int | None = None, left_out: list[str] | None = None) -> dict[str, CellRuns]:
     """The finished runs of ``variant`` under ``sweep_dir`` by cell name, runs sorted by seed.
 
-    A damaged run is left out: its line (the file, what is wrong) goes into ``left_out``, or,
-    without that list, to stderr.
+    A damaged run, or another cell's or seed's run in a folder (moved or copied there), is left
+    out: its line (the file, what is wrong) goes into ``left_out``, or, without that list, to
+    stderr.
 
     With ``algorithm``/``representation``/``budget``/``eval_points``/``eval_episodes`` given, a
     run of another learner, budget or evaluation schedule in the folder is an error (it would
@@ -81,6 +84,7 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             continue
         try:
             result = RunResult.read(folder)
+            check_place(folder, result, seed_dir.parent.name, seed_dir.name.removeprefix("seed="))
         except DamagedResult as damaged:
             if left_out is None:
                 print(f"left out: {damaged}", file=sys.stderr)
@@ -101,9 +105,6 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
             raise ValueError(f"{folder}: {len(result.steps)} evaluation points, but this table "
                              f"expects eval_points={eval_points}; the folder belongs to another sweep")
         cell_name = f"{result.strategy}_{result.n_source}"
-        if seed_dir.parent.name != cell_name or seed_dir.name != f"seed={result.seed}":
-            raise ValueError(f"{folder} holds the run {cell_name} seed={result.seed}: "
-                             "the folder does not match its content")
         cell = cells.setdefault(cell_name, CellRuns(result.strategy, result.n_source))
         if result.failed:  # its curve stops where the run was stopped
             cell.failed.append(result)

@@ -15,6 +15,7 @@ from omegaconf import DictConfig
 
 from ..config.compose import ConfigError
 from ..results import DamagedResult, RunResult
+from ..stored.check import check_place
 from ..sweep import _with_seed, _without_seed
 
 
@@ -28,13 +29,17 @@ class PlannedRun:
     folder: Path
 
 
-def is_finished(folder: Path, rerun_stale: bool) -> bool:
+def is_finished(folder: Path, rerun_stale: bool, place: tuple[str, int] | None = None) -> bool:
     """True when sweep.job.run_job would skip the run in ``folder``: a result is there, it is not
-    damaged, and it is not a stale one that ``rerun_stale`` asks to recompute."""
+    damaged, it is the run of ``place`` (the folder's table cell and seed, when given), not
+    another's moved or copied there, and it is not a stale one that ``rerun_stale`` asks to
+    recompute."""
     if not RunResult.exists(folder):
         return False
     try:
         found = RunResult.read(folder)
+        if place is not None:
+            check_place(folder, found, *place)
     except DamagedResult:
         return False  # its job sets it aside and computes it again
     return not (rerun_stale and found.stale() is not None)
@@ -56,11 +61,17 @@ def plan_runs(job_overrides: Sequence[Sequence[str]], initial_index: int,
     return runs
 
 
+def place_of(cfg: DictConfig) -> tuple[str, int]:
+    """The table cell and seed a job's folder is for."""
+    return str(cfg.cell), int(cfg.seed)
+
+
 def split_finished(runs: Sequence[PlannedRun]) -> tuple[list[PlannedRun], list[PlannedRun]]:
     """(finished, to compute), each in sweep order."""
     finished, pending = [], []
     for run in runs:
-        (finished if is_finished(run.folder, bool(run.config.rerun_stale)) else pending).append(run)
+        finished_run = is_finished(run.folder, bool(run.config.rerun_stale), place_of(run.config))
+        (finished if finished_run else pending).append(run)
     return finished, pending
 
 

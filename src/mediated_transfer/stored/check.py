@@ -11,6 +11,8 @@
 
 Otherwise ``DamagedResult``, one line: the file and what is wrong with it. Records written before
 checksums existed (the committed paper-scale runs) are judged by everything but the checksum.
+``check_place`` judges a whole record against its folder: another cell's or seed's run there
+(moved or copied) is not the folder's run, and is treated as damaged.
 """
 
 from __future__ import annotations
@@ -68,6 +70,17 @@ def load(folder: str | Path) -> dict[str, Any]:
         raise DamagedResult(path, "its content differs from the checksum recorded when the run was "
                                   "written: edited or damaged since")
     return decode({k: v for k, v in record.items() if k != CHECKSUM})
+
+
+def check_place(folder: str | Path, held: Any, cell: str, seed: int | str) -> None:
+    """DamagedResult when ``folder``, the folder of table cell ``cell`` and seed ``seed``, holds
+    the run of another cell or seed (``held``: its RunResult), moved or copied there: whole as it
+    may be, it is not this folder's run. Like a damaged run, a sweep sets it aside and computes
+    the folder's run, and a report leaves it out, naming it."""
+    run = f"{held.strategy}_{held.n_source}", str(held.seed)
+    if run != (str(cell), str(seed)):
+        raise DamagedResult(Path(folder) / RESULT_FILE, f"holds the run {run[0]} seed={run[1]}, not this "
+                                                        f"folder's {cell} seed={seed}: moved or copied here")
 
 
 def _parse(path: Path) -> dict[str, Any]:

@@ -4,31 +4,42 @@ print its progress line (the entry point, app.py, and the launchers call it).
 Each job runs its learning run unless its folder already holds the result, writes the result
 there, logs it to MLflow and prints a progress line. Folders are deterministic (conf/config.yaml:
 hydra.run.dir / hydra.sweep.subdir), so running an interrupted sweep again skips every finished
-run and computes only the rest.
+run and computes only the rest. A folder that another process is computing for the same run is
+skipped; one claimed or finished for another configuration (two sweeps of different
+configurations sharing it) fails the job in one line naming the differences (``FolderClash``).
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from hydra.errors import CompactHydraException
 from omegaconf import DictConfig, OmegaConf
 
-from ..config.compose import first_line
-from ..config.spec import check_same_run, run_spec
+from ..config.compose import ConfigError, first_line
+from ..config.spec import check_same_run, comparable, differences, run_spec
 from ..results import DamagedResult, RunResult
 from ..stored.aside import set_aside
 from . import progress, tracking
-from .claim import claimed
+from .claim import claimed, holder
 from .identity import run_name, run_tags
 from .interrupted import sigterm_interrupts
 from .orphan import guard
 
 log = logging.getLogger("mediated_transfer")
+
+
+class FolderClash(ConfigError, CompactHydraException):
+    """A job's folder holds, or is being computed for, a run of another configuration: two
+    sweeps of different configurations share it. One line, which Hydra prints without a
+    traceback; the job fails, so the sweep ends non-zero."""
+
 
 def run_job(cfg: DictConfig, folder: str | os.PathLike, sweep_dir: str | os.PathLike | None = None,
             variant: str = "") -> dict:
@@ -56,8 +67,10 @@ def run_jobs(jobs: Sequence[Job]) -> list[dict]:
         for i, (cfg, folder, sweep_dir, variant) in enumerate(jobs):
             spec, folder = run_spec(cfg), Path(folder)
             job = _JobRef(cfg, spec, folder, sweep_dir, variant)
-            if not claims.enter_context(claimed(folder)):
-                # Another launch (of this sweep or one that overlaps it) is computing this run.
+            if not claims.enter_context(claimed(folder, job.claim)):
+                # Another launch (of this sweep or one that overlaps it) is computing this run,
+                # unless it computes another configuration there: then this says so and fails.
+                _check_holder(job)
                 log.info("%s: being computed by another process, skipped", job.label)
                 summaries[i] = job.summary("busy", None, None)
                 continue
@@ -85,10 +98,31 @@ class _JobRef:
         resolved = OmegaConf.to_container(cfg, resolve=True)
         assert isinstance(resolved, dict)
         self.resolved = resolved
+        # What the job records in its folder's claim while it holds it (sweep/claim.py).
+        self.claim = {"sweep": str(cfg.name),
+                      "config": json.loads(json.dumps(comparable(spec), sort_keys=True, default=str))}
 
     def summary(self, status: str, stale: str | None, reward_loss: float | None) -> dict:
         return {"cell": str(self.cfg.cell), "seed": int(self.cfg.seed), "variant": self.variant,
                 "status": status, "stale": stale, "reward_loss": reward_loss, "folder": str(self.folder)}
+
+
+def _check_holder(job: _JobRef) -> None:
+    """FolderClash (logged when it happens, one line) if the process holding the job's folder
+    recorded another configuration than the job's; nothing if the same, or nothing recorded."""
+    other = holder(job.folder)
+    if other is None or not isinstance(other["record"].get("config"), dict):
+        return
+    detail = differences(other["record"]["config"], job.claim["config"], ("the other", "this one"))
+    if not detail:
+        return
+    sweep = other["record"].get("sweep")
+    message = (f"{job.folder}: being computed by another process (pid {other['pid']}"
+               f"{f', sweep {sweep}' if sweep else ''}) for another configuration ({detail}): two sweeps "
+               "of different configurations share this folder; give one of them another paths.root "
+               "or paths.sweep_dir")
+    log.error("%s", message)
+    raise FolderClash(message)
 
 
 def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
@@ -101,6 +135,9 @@ def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
     try:
         found = RunResult.read(folder)
         check_same_run(found, job.spec, folder)
+    except ConfigError as other:  # finished by a sweep of another configuration since preflight
+        log.error("%s", other)
+        raise FolderClash(str(other)) from None
     except DamagedResult as damaged:
         moved = set_aside(folder)
         log.warning("%s: %s; set aside as %s, computing the run again", job.label, damaged,
