@@ -3,12 +3,14 @@
 ``cli`` checks the command first (sweep.preflight: every job's config, one-line errors, before
 any folder exists), then hands it to Hydra. Each job (``main``) is sweep/job.py's ``run_job``:
 reuse or compute the run, write it, log it, print its progress line. A command stopped by Ctrl-C,
-SIGTERM or a dead worker ends its runs' MLflow runs and says so in one line (sweep/interrupted.py).
+SIGTERM or a dead worker ends its runs' MLflow runs and says so in one line (sweep/interrupted.py);
+a full disk or a damaged MLflow store stops it in one line too (sweep/faults.py).
 """
 
 from __future__ import annotations
 
 import contextlib
+import multiprocessing
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -19,7 +21,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
-from .sweep import interrupted, preflight
+from .sweep import faults, interrupted, preflight
 from .sweep.job import run_job, run_jobs  # noqa: F401 - the launchers' and tests' door
 
 
@@ -34,6 +36,10 @@ def main(cfg: DictConfig) -> dict:
         if sweep_dir is not None:
             raise  # in a worker: let the launcher report it with the job
         raise SystemExit(f"Invalid configuration: {error}") from None
+    except faults.Fault as error:
+        if multiprocessing.parent_process() is not None:
+            raise  # in a pool's worker: its launcher says it once the other jobs have ended
+        raise SystemExit(str(error)) from None
 
 
 def cli(argv: Sequence[str] | None = None) -> Any:
@@ -77,7 +83,9 @@ def _cli(args: list[str], parsed, runs: list) -> Any:
     except ConfigError as error:
         raise SystemExit(f"Invalid configuration: {error}") from None
     except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line
-        raise SystemExit(f"Could not prepare the runs: {type(error).__name__}: {first_line(error)}") from None
+        fault = error if isinstance(error, faults.Fault) else faults.disk_full(error)
+        what = str(fault) if fault is not None else f"{type(error).__name__}: {first_line(error)}"
+        raise SystemExit(f"Could not prepare the runs: {what}") from None
     flags = list(args)
     for override in parsed.overrides:  # the overrides, wherever they stood, replaced by their prepared form
         flags.remove(override)

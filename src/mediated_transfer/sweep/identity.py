@@ -27,6 +27,11 @@ def variant_label(variant: str) -> str:
     return variant or BASELINE_TAG
 
 
+def run_label(cfg: DictConfig, variant: str) -> str:
+    """A run as its progress lines and errors name it: ``regular_50 seed=3`` (``[variant]``)."""
+    return f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
+
+
 def run_name(cfg: DictConfig, variant: str) -> str:
     """MLflow run name: ``regular_50/seed=3``, and ``[algorithm.lambda_=0.5]`` for a variant."""
     name = f"{cfg.cell}/seed={cfg.seed}"

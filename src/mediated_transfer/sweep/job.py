@@ -26,9 +26,9 @@ from ..config.compose import ConfigError, first_line
 from ..config.spec import check_same_run, comparable, differences, run_spec
 from ..results import DamagedResult, RunResult
 from ..stored.aside import set_aside
-from . import progress, tracking
+from . import faults, progress, tracking
 from .claim import claimed, holder
-from .identity import run_name, run_tags
+from .identity import run_label, run_name, run_tags
 from .interrupted import sigterm_interrupts
 from .orphan import guard
 
@@ -60,7 +60,36 @@ def run_jobs(jobs: Sequence[Job]) -> list[dict]:
     table cell, other seeds: lockstep.runs of them) are computed together in one lockstep group
     (lockstep/run.py), each still into its own folder, result and MLflow run. A single run on
     the CPU computes as ``run.execute_run`` (the same curve, bit for bit, as in a group).
-    In a pool's worker, the jobs stop (and the worker exits) once its launcher is gone."""
+    In a pool's worker, the jobs stop (and the worker exits) once its launcher is gone.
+
+    A full disk (or quota, or file size limit) or a damaged MLflow store stops the jobs as a
+    ``faults.Fault``: one line naming the run, the file and what to do."""
+    try:
+        return _run_jobs(jobs)
+    except Exception as error:
+        fault = job_fault(error, jobs)
+        if fault is None:
+            raise
+        raise fault from None
+
+
+def job_fault(error: BaseException, jobs: Sequence[Job]) -> faults.Fault | None:
+    """``error`` of ``jobs`` as a fault naming its run (the job whose folder holds the file it
+    could not write, else the jobs' cell and seeds), if it is one."""
+    cfg, folder = jobs[0][0], jobs[0][1]
+    store = _settings(cfg).store if cfg.tracking.enabled else None
+    fault = faults.store_damaged(error, store) or faults.disk_full(error, store=store, where=folder)
+    if fault is None:
+        return None
+    labels = {run_label(c, v): Path(f).absolute() for c, f, _, v in jobs}
+    file = Path(fault.file).absolute() if fault.file else None
+    named = [label for label, f in labels.items() if file is not None and file.is_relative_to(f)]
+    if named or len(labels) == 1:
+        return fault.of((named or list(labels))[0])
+    return fault.of(f"{cfg.cell} seed={','.join(str(c.seed) for c, *_ in jobs)}")
+
+
+def _run_jobs(jobs: Sequence[Job]) -> list[dict]:
     with guard(), contextlib.ExitStack() as claims:
         summaries: list[dict | None] = [None] * len(jobs)
         pending = []
@@ -94,7 +123,7 @@ class _JobRef:
 
     def __init__(self, cfg: DictConfig, spec, folder: Path, sweep_dir, variant: str):
         self.cfg, self.spec, self.folder, self.sweep_dir, self.variant = cfg, spec, folder, sweep_dir, variant
-        self.label = f"{cfg.cell} seed={cfg.seed}" + (f" [{variant}]" if variant else "")
+        self.label = run_label(cfg, variant)
         resolved = OmegaConf.to_container(cfg, resolve=True)
         assert isinstance(resolved, dict)
         self.resolved = resolved
@@ -230,8 +259,8 @@ class _Computing:
                                              run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
                                              tags=tags)
             except Exception as error:  # noqa: BLE001 - the store failed after the sweep's check
-                log.warning("%s: not followed in MLflow (%s: %s); rerunning the sweep logs it",
-                            folder, type(error).__name__, first_line(error))
+                log.warning("%s: not followed in MLflow: %s", run_label(cfg, variant),
+                            tracking.not_logged(_settings(cfg), error))
 
         def evaluated(step: int, mean_reward: float, success_rate: float) -> None:
             if watch is not None:

@@ -35,6 +35,7 @@ import contextlib
 import fcntl
 import hashlib
 import json
+import logging
 import math
 import os
 import time
@@ -45,6 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from ..results import RunResult
+from . import faults
 from .claim import open_lock_file
 
 KIND_RUN = "run"
@@ -85,12 +87,24 @@ class TrackingSettings:
                              "(or tracking=sqlite for the embedded store, tracking=none to disable)")
         return cls(str(uri), None if cfg.get("artifact_location") is None else str(cfg["artifact_location"]))
 
+    @property
+    def store(self) -> Path | None:
+        """The SQLite store's file (None: a server)."""
+        return Path(self.uri.removeprefix("sqlite:///")) if self.uri.startswith("sqlite:///") else None
+
     def client(self):
         from mlflow.tracking import MlflowClient
 
+        logging.getLogger("mlflow.store.db.utils").addFilter(_reraised)
         if self.uri.startswith("sqlite:///"):
             _create_store_file(Path(self.uri.removeprefix("sqlite:///")))
         return MlflowClient(tracking_uri=self.uri)
+
+
+def _reraised(record: logging.LogRecord) -> bool:
+    """MLflow logs each database error of its store with its traceback (80 lines), then raises
+    it: the caller reports it (a full disk or a damaged store in one line), so the log goes."""
+    return not str(record.msg).startswith("SQLAlchemy database error")
 
 
 def _create_store_file(db: Path) -> None:
@@ -112,14 +126,37 @@ CHECK_TIMEOUT_S = 10
 
 def prepare(settings: TrackingSettings, experiment: str) -> str:
     """Create the store (if new) and the experiment (if missing); returns its id. Fails within
-    seconds when a server does not answer (MLflow would retry for minutes). For a SQLite
-    store this holds a lock beside it: two sweeps starting together on a new store would
-    otherwise both create its tables, and one would fail."""
-    with _store_lock(settings), _impatient():
-        client = settings.client()
-        experiment_id = _experiment_id(client, settings, experiment)
-        _ensure_view(client, experiment_id, client.get_experiment(experiment_id).tags)
-        return experiment_id
+    seconds when a server does not answer (MLflow would retry for minutes); a damaged SQLite
+    store or a full disk as a ``Fault`` naming the store. For a SQLite store this holds a lock
+    beside it: two sweeps starting together on a new store would otherwise both create its
+    tables, and one would fail."""
+    try:
+        with _store_lock(settings), _impatient():
+            client = settings.client()
+            experiment_id = _experiment_id(client, settings, experiment)
+            _ensure_view(client, experiment_id, client.get_experiment(experiment_id).tags)
+            return experiment_id
+    except Exception as error:
+        fault = store_fault(settings, error)
+        if fault is None:
+            raise
+        raise fault from None
+
+
+def store_fault(settings: TrackingSettings, error: BaseException) -> faults.Fault | None:
+    """``error`` as the one line of a damaged SQLite store or a full disk, if it is one."""
+    return faults.store_damaged(error, settings.store) or faults.disk_full(error, store=settings.store)
+
+
+def not_logged(settings: TrackingSettings, error: BaseException) -> str:
+    """Why a run's MLflow run stopped, and what logs it (a warning's words): the real remedy for
+    a damaged store or a full disk; for another error (a server that did not answer), rerunning
+    the sweep, which logs every finished run that MLflow lacks."""
+    fault = store_fault(settings, error)
+    if fault is not None:
+        return str(fault)
+    text = str(error).strip()
+    return f"{type(error).__name__}: {text.splitlines()[0] if text else ''}; rerunning the sweep logs it"
 
 
 def _ensure_view(client, experiment_id: str, tags: Mapping[str, str]) -> None:
@@ -228,6 +265,7 @@ class LiveRun:
                  params: Mapping[str, Any], tags: Mapping[str, str]):
         from mlflow.entities import Param
 
+        self.settings = settings
         self.client = client = settings.client()
         experiment_id = _experiment_id(client, settings, experiment)
         self.run_id: str | None = None
@@ -245,7 +283,7 @@ class LiveRun:
     def resume(cls, settings: TrackingSettings, run_id: str) -> "LiveRun":
         """The live run ``run_id``, left RUNNING by a process that is gone, to end it."""
         live = cls.__new__(cls)
-        live.client, live.run_id = settings.client(), run_id
+        live.settings, live.client, live.run_id = settings, settings.client(), run_id
         return live
 
     def evaluation(self, step: int, mean_reward: float, success_rate: float) -> None:
@@ -275,16 +313,15 @@ class LiveRun:
         self.run_id = None
 
     def _safely(self, log) -> None:
-        """Tracking must never cost a run: if the store fails, following stops (one warning)
-        and the run goes on; its result file is written, and rerunning the sweep logs it."""
+        """Tracking must never cost a run: if the store fails, following stops (one warning,
+        saying what logs it: ``not_logged``) and the run goes on; its result file is written."""
         if self.run_id is None:
             return
         try:
             log(self.run_id)
         except Exception as error:  # noqa: BLE001 - any store or network error
-            warnings.warn(f"MLflow stopped following this run ({type(error).__name__}: "
-                          f"{str(error).splitlines()[0] if str(error) else ''}); its result is kept, "
-                          "and rerunning the sweep logs it", RuntimeWarning, stacklevel=2)
+            warnings.warn(f"MLflow stopped following this run, its result is kept: {not_logged(self.settings, error)}",
+                          RuntimeWarning, stacklevel=2)
             self.run_id = None
 
 
