@@ -427,3 +427,34 @@ def plugin_target(name):
 def plugin_params(name):
     node = OmegaConf.to_container(OmegaConf.load(CURRICULA_CONF / "strategy" / f"{name}.yaml"))
     return {k: v for k, v in node.items() if k not in ("_target_", "name")}
+
+
+def test_exposure_counts_every_annulus_episode_and_old_records_fall_back_to_target_tasks():
+    from mediated_transfer.curricula.measures import exposure, first_annulus_success
+
+    def run(choices):
+        return RunResult(algorithm="linear_q", representation="fsr", strategy="x", n_source=0, seed=0,
+                         budget=300, steps=[100, 200, 300], mean_reward=[0.0] * 3, success_rate=[0.0] * 3,
+                         reward_loss=30.0, time_to_threshold=None, source_phase_end=None, source_tasks_solved=0,
+                         wall_time_s=1.0, learning_steps_per_s=1.0, choices=choices)
+
+    new = {"every": 100, "episodes": [3, 1, 0], "target_share": [0.0, 0.0, None],
+           "annulus_share": [1 / 3, 1.0, None], "annulus_solved": [0, 1, 0]}
+    assert exposure(run(new)) == pytest.approx(0.5)  # (1 + 1) of 4 episodes, by episodes not bins
+    assert first_annulus_success(run(new)) == 200  # the end of the first interval with one solved
+    old = {"every": 100, "episodes": [2, 2, 0], "target_share": [0.5, 1.0, None]}
+    assert exposure(run(old)) == pytest.approx(0.75) and first_annulus_success(run(old)) is None
+    assert exposure(run(None)) is None
+
+
+def test_the_dqn_picks_are_the_two_lowest_geometric_means_of_r_s_ties_in_registered_order():
+    from mediated_transfer.curricula.measures import dqn_picks
+
+    order = ["dr_0", "reverse_0", "sfl_0", "currot_0"]
+    ratios = {"RBF, default": {"dr_0": 2.0, "reverse_0": 1.0, "sfl_0": 0.5, "currot_0": 4.0},
+              "FSR, default": {"dr_0": 0.5, "reverse_0": 1.0, "sfl_0": 2.0, "currot_0": 0.1}}
+    # geometric means: dr 1, reverse 1, sfl 1, currot 0.63; ties among the first three by order
+    assert dqn_picks(ratios, order) == ["currot_0", "dr_0"]
+    # a curriculum without runs in one of the groups cannot be picked
+    del ratios["FSR, default"]["currot_0"]
+    assert dqn_picks(ratios, order) == ["dr_0", "reverse_0"]
