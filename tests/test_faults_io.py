@@ -15,7 +15,6 @@ import sys
 from pathlib import Path
 
 import pytest
-from hydra.core.global_hydra import GlobalHydra
 
 from mediated_transfer import atomic, results
 from mediated_transfer.app import cli, run_job
@@ -23,20 +22,10 @@ from mediated_transfer.config.compose import compose_config
 from mediated_transfer.results import RunResult
 from mediated_transfer.sweep import tracking
 
+from .test_sweep import _run_cli
 from .test_tracking import _live, fresh_store
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-
-
-def _run_cli(*args: str) -> None:
-    GlobalHydra.instance().clear()
-    saved = sys.argv
-    try:
-        sys.argv = ["mediated_transfer"]
-        cli(list(args))
-    finally:
-        sys.argv = saved
-        GlobalHydra.instance().clear()
 
 
 def _mount_point(path: Path) -> str:
