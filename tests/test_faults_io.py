@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from mediated_transfer import atomic, results
-from mediated_transfer.app import cli, run_job
+from mediated_transfer.app import run_job
 from mediated_transfer.config.compose import compose_config
 from mediated_transfer.results import RunResult
 from mediated_transfer.sweep import tracking
