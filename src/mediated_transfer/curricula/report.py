@@ -18,7 +18,7 @@ from ..reporting.collect import collect_sweep
 from ..reporting.formats import write_csv
 from ..reporting.intervals import format_interval
 from .figures import label, plot_choices, plot_curves
-from .measures import (arm_measures, compare, dqn_picks, exposure_correlation, steps_text, time_ratio, verdict)
+from .measures import (ArmMeasures, arm_measures, compare, dqn_picks, exposure_correlation, steps_text, time_ratio, verdict)
 from .study import DEFAULT_WORLD, NONE, REGULAR, SCAFFOLDED, Study
 
 REPORT = "CURRICULA.md"
@@ -40,14 +40,20 @@ def collect(study: Study) -> tuple[dict[str, dict[str, list]], dict[str, dict[st
     return runs, failed
 
 
-def measures_table(study: Study, arms: dict[str, list], failed: dict[str, int], threshold: float) -> pd.DataFrame:
+def group_measures(study: Study, arms: dict[str, list], failed: dict[str, int],
+                   threshold: float) -> dict[str, ArmMeasures | None]:
+    """Each arm's measures (None: no runs yet)."""
+    return {cell: arm_measures(cell, arms[cell], failed[cell], threshold) if arms[cell] else None
+            for cell in study.cells}
+
+
+def measures_table(study: Study, measures: dict[str, ArmMeasures | None]) -> pd.DataFrame:
     """One group's measures, one row per arm."""
     rows = []
-    for cell in study.cells:
-        if not arms[cell]:
+    for cell, m in measures.items():
+        if m is None:
             rows.append({"Arm": label(cell), "Runs": f"0/{len(study.seeds)}"})
             continue
-        m = arm_measures(cell, arms[cell], failed[cell], threshold)
         exposure = "-" if m.exposure_median is None else f"{m.exposure_median:.3f}"
         rows.append({
             "Arm": label(cell), "Runs": f"{m.runs}/{len(study.seeds)}" + (f" ({m.failed} failed)" if m.failed else ""),
@@ -112,7 +118,8 @@ def write_report(study: Study, reports_dir: Path, superseded: str = "", dqn: Stu
         progress(f"curricula: measuring {group} ({sum(len(v) for v in arms.values())} runs)")
         q1, w1, r1 = decision_table(study, arms, study.curricula, threshold, budget)
         q2, w2, _ = decision_table(study, arms, study.handovers, threshold, budget)
-        parts[group] = {"measures": measures_table(study, arms, failed[group], threshold), "q1": q1, "q2": q2,
+        measures = group_measures(study, arms, failed[group], threshold)
+        parts[group] = {"arms": measures, "measures": measures_table(study, measures), "q1": q1, "q2": q2,
                         "w1": w1, "w2": w2, "r1": r1}
     paths = []
     for group, part in parts.items():
@@ -141,7 +148,7 @@ def _dqn_section(dqn: Study, threshold: float, budget: int) -> str:
     lines += _verdict_lines("Q1 for the DQN: does a picked curriculum beat the scaffolding?", {"DQN": words})
     if not decision.empty:
         lines += [_markdown(decision), ""]
-    return "\n".join(lines + [_markdown(measures_table(dqn, arms, failed[group], threshold))])
+    return "\n".join(lines + [_markdown(measures_table(dqn, group_measures(dqn, arms, failed[group], threshold)))])
 
 
 def _verdict_lines(question: str, words: dict[str, dict[str, str]]) -> list[str]:
@@ -227,28 +234,27 @@ def render(study: Study, parts: dict[str, dict], runs: dict[str, dict[str, list]
 
 
 def _exposure_table(study: Study, parts: dict[str, dict]) -> pd.DataFrame:
-    """Arms as rows, one column per group: 'L_R (exposure)'."""
+    """Arms as rows, one column per group: 'L_R (exposure)', from the arms' measures."""
     frame = pd.DataFrame({"Arm": [label(c) for c in study.cells]})
     for group, part in parts.items():
-        measures = part["measures"].set_index("Arm")
-        frame[group] = [f"{measures.at[label(c), 'L_R'].split(' ')[0]} ({measures.at[label(c), 'Exposure (median)']})"
-                        if "L_R" in measures and isinstance(measures.at[label(c), "L_R"], str)
-                        and measures.at[label(c), "L_R"] else "-" for c in study.cells]
+        frame[group] = [_loss_and_exposure(part["arms"][c]) for c in study.cells]
     return frame
+
+
+def _loss_and_exposure(m: ArmMeasures | None) -> str:
+    if m is None:
+        return "-"
+    exposure = "-" if m.exposure_median is None else f"{m.exposure_median:.3f}"
+    return f"{m.reward_loss_mean:.2f} ({exposure if m.exposure_counts_all else '≥ ' + exposure})"
 
 
 def _correlations(study: Study, parts: dict[str, dict]) -> list[str]:
     out = []
     for group, part in parts.items():
-        m = part["measures"]
-        if "Exposure (median)" not in m:
-            continue
-        rows = m[m["L_R"].astype(str).str.len() > 0]
-        exposure = [float(str(e).lstrip("≥ ")) for e in rows["Exposure (median)"] if str(e) not in ("", "-")]
-        losses = [float(str(v).split(" ")[0]) for v in rows["L_R"]]
-        rho = exposure_correlation(exposure, losses) if len(exposure) == len(losses) else None
+        measured = [m for m in part["arms"].values() if m is not None and m.exposure_median is not None]
+        rho = exposure_correlation([m.exposure_median for m in measured], [m.reward_loss_mean for m in measured])
         if rho is not None:
-            out.append(f"{group} {rho:+.2f} ({len(losses)} arms)")
+            out.append(f"{group} {rho:+.2f} ({len(measured)} arms)")
     return out
 
 
