@@ -15,6 +15,7 @@ from mediated_transfer import evaluate as evaluate_cli
 from mediated_transfer.env import MediatedInteractionEnv, animate
 from mediated_transfer.results import RunResult
 from mediated_transfer.run import RunSpec, execute_run
+from mediated_transfer.stored import codec
 from mediated_transfer.saved_learner import (DQN_FILE, LINEAR_FILE, SavedLearnerError, load_learner,
                                              save_learner)
 
@@ -141,7 +142,7 @@ def test_a_recomputed_run_does_not_keep_the_learner_of_the_run_before(tmp_path, 
     assert (folder / LINEAR_FILE).is_file()
     stored = json.loads((folder / "result.json").read_text())
     stored["code"] = {"commit": "0" * 40, "dirty": False, "digest": "0" * 16}  # as if older code wrote it
-    del stored["checksum"]  # which wrote none
+    stored["checksum"] = codec.checksum(stored)  # sealed as the committed runs are
     (folder / "result.json").write_text(json.dumps(stored))
     _smoke_run(tmp_path, source_cache, "rerun_stale=true", "save_learner=false")
     assert RunResult.read(folder).stale() is None and not (folder / LINEAR_FILE).exists()

@@ -22,7 +22,7 @@ from mediated_transfer.config.spec import check_same_run, run_spec
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.results import CURVE_FILE, RESULT_FILE, DamagedResult, RunResult
 from mediated_transfer.slurm.jobs import is_finished
-from mediated_transfer.stored import check, codec
+from mediated_transfer.stored import check, codec, seal
 from mediated_transfer.stored.aside import SUFFIX, set_aside
 
 from .optional import needs_deep
@@ -87,6 +87,12 @@ def _plausible_edit_everywhere(path: Path) -> None:
     (path.parent / CURVE_FILE).write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
 
 
+def _edit_without_checksum(path: Path) -> None:
+    """The consistent edit above, and the checksum that would show it deleted."""
+    _plausible_edit_everywhere(path)
+    _edit(lambda r: r.pop(codec.CHECKSUM))(path)
+
+
 # fault -> (inject into result.json's path, what the one-line message says, the file it names)
 FAULTS = {
     "truncated": (lambda p: p.write_text(p.read_text()[: len(p.read_text()) // 2]),
@@ -113,6 +119,7 @@ FAULTS = {
                        "reward_loss 20.0 is not that of its mean_reward (12.75)", RESULT_FILE),
     "plausible edit everywhere": (_plausible_edit_everywhere,
                                   "differs from the checksum recorded when the run was written", RESULT_FILE),
+    "plausible edit everywhere, checksum deleted": (_edit_without_checksum, "has no checksum", RESULT_FILE),
 }
 
 
@@ -197,13 +204,37 @@ def test_set_aside_renames_the_runs_files_only_and_never_overwrites(tmp_path):
     assert (folder / "algorithm.lambda_=0.5").is_dir() and (folder / "mediated_transfer.log").is_file()
 
 
-def test_every_committed_run_reads_valid_without_a_checksum():
-    # Written before checksums existed: judged by their consistency, and all of it holds.
+def test_every_committed_run_carries_a_checksum_and_reads_valid():
+    # Those written before checksums existed were sealed once (stored/seal.py).
     folders = [p.parent for p in MULTIRUN.glob(f"**/{RESULT_FILE}")]
-    assert len(folders) >= 660
-    assert all(codec.CHECKSUM not in json.loads((f / RESULT_FILE).read_text()) for f in folders[:50])
+    assert len(folders) >= 2700
     for folder in folders:
+        assert codec.CHECKSUM in json.loads((folder / RESULT_FILE).read_text()), folder
         RunResult.read(folder)
+
+
+def test_sealing_adds_the_checksum_and_nothing_else(sweep):
+    root, _ = sweep
+    path = root / RUN / RESULT_FILE
+    sealed_text = path.read_text()
+    _edit(lambda r: r.pop(codec.CHECKSUM))(path)  # as written before issue 38
+    with pytest.raises(DamagedResult, match="has no checksum.*seal"):
+        RunResult.read(root / RUN)
+    assert seal.seal(root / RUN) and not seal.seal(root / RUN)  # once
+    assert path.read_text() == sealed_text
+    RunResult.read(root / RUN)
+
+
+def test_sealing_leaves_a_damaged_record_as_it_is_and_names_it(sweep, capsys):
+    root, _ = sweep
+    path = root / RUN / RESULT_FILE
+    _edit(lambda r: (r.pop(codec.CHECKSUM), r.update(mean_reward=[3.5, 3.75])))(path)
+    damaged = path.read_text()
+    assert seal.main([str(root)]) == 1
+    out, err = capsys.readouterr()
+    assert "sealed 0 record(s); 3 already had a checksum; 1 damaged" in out
+    assert f"not sealed: {path}: reward_loss 20.0 is not that of its mean_reward" in err
+    assert path.read_text() == damaged
 
 
 def test_a_new_result_records_its_checksum_and_reads_back_equal(sweep):
@@ -270,7 +301,7 @@ def test_a_result_that_earlier_code_wrote_with_null_for_inf_is_set_aside_and_rec
     [stored] = tmp_path.rglob(RESULT_FILE)
     record = json.loads(stored.read_text())
     record["config"]["algorithm"]["huber_delta"] = None  # as the code before issue 38 wrote it
-    del record[codec.CHECKSUM]
+    record[codec.CHECKSUM] = codec.checksum(record)  # sealed as the committed runs are
     stored.write_text(json.dumps(record))
     with pytest.raises(DamagedResult, match="its recorded config is not a run this code can read"):
         check_same_run(RunResult.read(stored.parent), run_spec(compose_config(args)), stored.parent)

@@ -171,7 +171,7 @@ def test_a_result_recorded_before_the_world_gained_a_key_is_the_same_run(root, s
     run_job(cfg, folder)
     stored = json.loads((folder / "result.json").read_text())
     del stored["config"]["env"]["move_frame"]
-    del stored["checksum"]  # older code wrote none
+    stored["checksum"] = codec.checksum(stored)  # sealed as the committed runs are
     (folder / "result.json").write_text(json.dumps(stored))
     run_job(cfg, folder)  # found, not refused
     with pytest.raises(ConfigError, match="world.move_frame: stored 'radial', now 'tool'"):
@@ -223,7 +223,7 @@ def test_a_result_of_other_code_is_reported_stale_and_recomputed_on_request(root
 
     stored = json.loads((folder / "result.json").read_text())
     stored["code"] = {"commit": "0" * 40, "dirty": False, "digest": "0" * 16}  # as if older code wrote it
-    del stored["checksum"]  # older code wrote none
+    stored["checksum"] = codec.checksum(stored)  # sealed as the committed runs are
     (folder / "result.json").write_text(json.dumps(stored))
     assert "computed by other code: commit 0000000000" in RunResult.read(folder).stale()
     _run_cli(*args)

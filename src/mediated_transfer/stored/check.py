@@ -9,8 +9,10 @@
   its reward loss and time to threshold are those of its curve;
 - curve.csv holds the same curve.
 
-Otherwise ``DamagedResult``, one line: the file and what is wrong with it. Records written before
-checksums existed (the committed paper-scale runs) are judged by everything but the checksum.
+Otherwise ``DamagedResult``, one line: the file and what is wrong with it. A record without a
+checksum is damaged too: records carry one since issue 38, and those written before (the
+committed paper-scale runs) were sealed once (seal.py), so a record without one had it deleted;
+and only the checksum shows an edit of result.json and curve.csv that agree with each other.
 ``check_place`` judges a whole record against its folder: another cell's or seed's run there
 (moved or copied) is not the folder's run, and is treated as damaged.
 """
@@ -57,6 +59,21 @@ _TOLERANCE = 1e-9
 
 def load(folder: str | Path) -> dict[str, Any]:
     """The record of the run stored in ``folder``, validated; DamagedResult if it is not whole."""
+    path = Path(folder) / RESULT_FILE
+    record = consistent(folder)
+    if CHECKSUM not in record:
+        raise DamagedResult(path, "has no checksum: every record carries one, so it was deleted and the "
+                                  "record may have been edited; if you trust it, seal it with "
+                                  f"`python -m mediated_transfer.stored.seal {Path(folder)}`")
+    if record[CHECKSUM] != checksum(record):
+        raise DamagedResult(path, "its content differs from the checksum recorded when the run was "
+                                  "written: edited or damaged since")
+    return decode({k: v for k, v in record.items() if k != CHECKSUM})
+
+
+def consistent(folder: str | Path) -> dict[str, Any]:
+    """result.json's raw record in ``folder`` if it is whole and consistent with itself and
+    curve.csv, its checksum not yet judged; DamagedResult otherwise."""
     folder = Path(folder)
     path = folder / RESULT_FILE
     record = _parse(path)
@@ -66,10 +83,7 @@ def load(folder: str | Path) -> dict[str, Any]:
         if problem:
             raise DamagedResult(path, problem)
     _check_curve(folder / CURVE_FILE, record)
-    if CHECKSUM in record and record[CHECKSUM] != checksum(record):
-        raise DamagedResult(path, "its content differs from the checksum recorded when the run was "
-                                  "written: edited or damaged since")
-    return decode({k: v for k, v in record.items() if k != CHECKSUM})
+    return record
 
 
 def check_place(folder: str | Path, held: Any, cell: str, seed: int | str) -> None:
