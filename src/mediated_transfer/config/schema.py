@@ -5,7 +5,7 @@ One place per default, by kind:
 - The world and the learners are used from Python as well (``gymnasium.make``, tests, the
   bench), so their dataclasses hold the defaults and explain them in field docstrings:
   ``WorldConfig`` (env/config.py), ``LinearQConfig`` (learners/linear_q.py), ``RBFConfig``
-  (learners/rbf.py), ``FSRConfig`` (learners/fsr.py), ``DQNConfig`` (learners/dqn.py),
+  (learners/rbf.py), ``FSRConfig`` (learners/fsr.py), ``DQNConfig`` (learners/dqn_config.py),
   ``SB3PPOConfig`` and ``SB3DQNConfig`` (learners/sb3.py). They are
   the options of the groups ``env``, ``algorithm`` and ``representation`` (registered below;
   there are no YAML copies of them). conf/env/*.yaml are further ``env`` options, the readings
@@ -27,7 +27,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import MISSING, DictConfig, OmegaConf
 
 from ..env.config import WorldConfig
-from ..learners.dqn import DQNConfig
+from ..learners.dqn_config import DQNConfig
 from ..learners.fsr import FSRConfig
 from ..learners.linear_q import LinearQConfig
 from ..learners.rbf import RBFConfig

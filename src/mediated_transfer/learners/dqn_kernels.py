@@ -27,7 +27,8 @@ import torch
 from ..env.task import NUM_DISTANCES
 
 if TYPE_CHECKING:
-    from .dqn import DQNConfig, QNetwork
+    from .dqn_config import DQNConfig
+    from .dqn_network import QNetwork
 
 
 # --------------------------------------------------------------------------------------------

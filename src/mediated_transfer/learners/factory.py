@@ -19,7 +19,7 @@ from ..config.mapping import config_from_mapping
 from ..env.config import WorldConfig
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
 from .base import Learner
-from .dqn import DQNConfig, ReplayBuffer, layer_shapes
+from .dqn_config import DQNConfig, layer_shapes
 from .fsr import FSRConfig
 from .linear_q import LinearQConfig
 from .rbf import RBFConfig
@@ -90,6 +90,8 @@ def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
         params += rest[-1][0] * (rest[-1][1] + 1)
         # float32: the replay buffer and its batch; weights, target weights, gradient and
         # Adam's two moments; the batch's activations (forward and backward).
+        from .dqn import ReplayBuffer  # torch: only where a DQN is asked for
+
         rows = (c.buffer_size + c.batch_size) * ReplayBuffer.WIDTH
         activations = 2 * c.batch_size * c.hidden_size * c.num_hidden_layers
         return 4 * (rows + 5 * params + activations)

@@ -28,7 +28,7 @@ from ..sweep.orphan import launcher_watch
 from ..sweep.progress import duration
 from ..sweep.tracking import TrackingSettings
 from . import mlflow_log
-from .export import STUDY_FILE, write_trials_csv
+from .trials import STUDY_FILE, write_trials_csv
 from .objective import StoppedEarly, evaluate
 from .sampler import TrialSeededRandomSampler
 from .space import SearchSpace

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_write_text
-from .export import TRIALS_FILE
+from .trials import TRIALS_FILE
 from .space import SearchSpace, SearchSpaceError, available_learners, find_search_space, override_value
 from .study import DEFAULTS, study_folder
 
