@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import platform
 import shutil
 import subprocess
 import sys
@@ -14,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from mediated_transfer.provenance import RESULTS_FORMAT, run_digest, run_kind, staleness, translate
+from mediated_transfer.provenance import (LIBRARIES, RESULTS_FORMAT, library_versions, run_digest, run_kind,
+                                          staleness, translate)
 from mediated_transfer.provenance.certify import builtin_kinds, digests_now
 from mediated_transfer.provenance.closure import closure_digest
 from mediated_transfer.run import RunSpec
@@ -193,3 +195,14 @@ def test_a_digest_does_not_depend_on_what_the_process_composed_before():
         assert closure_digest(run_roots(spec)) == before
     finally:  # leave no remembered folder to the tests after this one
         compose_config(["tracking=none"])
+
+
+def test_the_versions_of_the_libraries_a_run_computes_with_are_read_without_importing_them():
+    probe = ("import sys\nfrom mediated_transfer.provenance import library_versions\n"
+             "v = library_versions()\nprint(v['numpy'], v['pymunk'], v['python'], 'torch' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout.split()
+    import numpy
+    import pymunk
+
+    assert out == [numpy.__version__, pymunk.version, platform.python_version(), "False"]
+    assert set(library_versions()) == {"python", *LIBRARIES}

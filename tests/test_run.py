@@ -30,6 +30,7 @@ def test_a_tiny_run_of_each_learner_writes_a_complete_result(tmp_path, algorithm
     back = RunResult.read(tmp_path / "run")
     assert back == result
     assert back.steps == [200, 400, 600]
+    assert back.code["versions"]["numpy"] == np.__version__  # what the digest does not follow
     assert len(back.mean_reward) == len(back.success_rate) == 3
     assert all(0.0 <= r <= 10.0 for r in back.mean_reward)
     assert back.reward_loss == pytest.approx(sum(10.0 - r for r in back.mean_reward))

@@ -12,13 +12,15 @@ Results recorded before this scheme (a digest of whole files), or before a refac
 shown to compute the same curves, stay current through ``translations.json``: each step maps
 the digests of one commit to those of a later one, per run kind, and says why they compute the
 same (certify.py writes a step). The digest covers this project's and its plugins' code only:
-another numpy, torch or pymunk version, or another Python, is not seen.
+another numpy, torch or pymunk version, or another Python, is not seen by it; the versions a run
+computed with are recorded beside it (``versions``), for people comparing runs across machines.
 """
 
 from __future__ import annotations
 
 import functools
 import json
+import platform
 import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -34,6 +36,8 @@ SCHEME = 3
 """Version of the code digest (3: the closure of a run's roots; 2: whole computing files)."""
 PACKAGE = Path(__file__).resolve().parents[1]
 TRANSLATIONS = Path(__file__).with_name("translations.json")
+LIBRARIES = ("numpy", "numba", "torch", "pymunk", "gymnasium", "stable-baselines3")
+"""Third-party code that computes a run, which the digest does not follow."""
 
 
 def run_roots(spec: "RunSpec", lockstep: bool = False) -> list[Any]:
@@ -70,19 +74,35 @@ def _digest(key: tuple[str, ...], roots: tuple) -> str:
 
 
 def code_version(spec: "RunSpec", lockstep: bool = False) -> dict[str, Any]:
-    """``{"commit", "dirty", "digest", "scheme", "algorithm", "plugins"}`` of the code that computes
-    ``spec`` in this process (commit/dirty None without git); ``lockstep``: computed in a group."""
+    """``{"commit", "dirty", "digest", "scheme", "algorithm", "versions", "plugins"}`` of the code
+    that computes ``spec`` in this process (commit/dirty None without git); ``lockstep``: computed
+    in a group."""
     from .. import plugins
 
     version: dict[str, Any] = {"commit": _git("rev-parse", "HEAD"), "dirty": _dirty(),
                                "digest": run_digest(spec, lockstep), "scheme": SCHEME,
-                               "algorithm": spec.algorithm}
+                               "algorithm": spec.algorithm, "versions": library_versions()}
     foreign = [plugins.identity(r) for r in run_roots(spec, lockstep) if _top(r) != PROJECT]
     if foreign:
         version["plugins"] = foreign
     if lockstep:
         version["lockstep"] = True
     return version
+
+
+@functools.cache
+def library_versions() -> dict[str, str | None]:
+    """Python's version and each of LIBRARIES' as installed (None: not installed), read from the
+    packages' metadata: nothing is imported for it (a linear run never imports torch)."""
+    from importlib import metadata
+
+    versions: dict[str, str | None] = {"python": platform.python_version()}
+    for name in LIBRARIES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return versions
 
 
 def staleness(recorded: dict[str, Any] | None, results_format: int | None, spec: "RunSpec") -> str | None:
