@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ...metrics import first_point_at_threshold, learning_span
+from ...metrics import learning_span, loss_after_learning
 from ..intervals import (bootstrap, format_interval, iqm, median, probability_of_improvement, ratio_of_means,
                          sem)
 from .runs import MAX_REWARD, THRESHOLD, Learner, never_learns
@@ -61,11 +61,7 @@ def split_table(learners: dict[str, Learner]) -> list[str]:
             discovery = [r.first_target_reward_step for r in runs if r.first_target_reward_step is not None]
             spans = [s for r in runs if (s := learning_span(r.first_target_reward_step, r.steps, r.mean_reward,
                                                             THRESHOLD)) is not None]
-            holding = []
-            for r in runs:
-                first = first_point_at_threshold(r.mean_reward, THRESHOLD)
-                if first is not None:
-                    holding.append(sum(MAX_REWARD - v for v in r.mean_reward[first:]))
+            holding = [h for r in runs if (h := loss_after_learning(r.mean_reward, THRESHOLD, MAX_REWARD)) is not None]
             out.append(f"| {lr.name} | {cell} | {len(runs)} | median {steps_k(_median(discovery))} "
                        f"({len(discovery)} of {len(runs)} discover) | median {steps_k(_median(spans))} "
                        f"({len(spans)} get there) | median {_median(holding, 1)} |")
