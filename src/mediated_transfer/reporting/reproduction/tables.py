@@ -43,7 +43,7 @@ def cell_table(lr: Learner) -> list[str]:
         failed = f" (+{len(lr.cells[cell].failed)} diverged)" if lr.cells[cell].failed else ""
         out.append(f"| {cell} | {len(runs)}{failed} | {losses.mean():.1f} ± {sem(losses):.1f} | {iqm(losses):.1f} | "
                    f"{p.reward_loss_mean:.1f} | {ratio} | {improve} | {lr.never_learn(cell)} | "
-                   f"{steps_k(lr.mean_curve_time(cell))} / {_median_time(lr.times_to_threshold(cell))} |")
+                   f"{steps_k(lr.mean_curve_time(cell))} / {_median_time_interval(lr.times_to_threshold(cell))} |")
     return out
 
 
@@ -81,7 +81,7 @@ def dqn_failures(learners: dict[str, Learner]) -> list[str]:
             "[dqn_failure_ablation.md](dqn_failure_ablation.md) (`make dqn-ablation`)."]
 
 
-def _median_time(times: np.ndarray) -> str:
+def _median_time_interval(times: np.ndarray) -> str:
     """The median per-run time to threshold with its bootstrap interval (never: slower than any)."""
     point, low, high = bootstrap(median, times)
     return f"{steps_k(point)} [{steps_k(low)}, {steps_k(high)}]"

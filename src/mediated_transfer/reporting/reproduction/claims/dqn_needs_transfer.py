@@ -35,9 +35,9 @@ def parts() -> tuple[Part, Part, Part, Part]:
 def claim_5(learners: dict[str, Learner]) -> Claim:
     dnn = learners["IV"]
     reach, low, high, when = parts()
-    parts_ = [reach, low, high, when]
+    all_parts = [reach, low, high, when]
     if not dnn.runs("none_0") or not dnn.runs("regular_100"):
-        return Claim(TEXT, SHORT, SOURCE, SCOPE, parts_, ["Table IV has no runs of these rows yet."])
+        return Claim(TEXT, SHORT, SOURCE, SCOPE, all_parts, ["Table IV has no runs of these rows yet."])
     for cell, paper_reaches in (("none_0", False), ("regular_100", True)):
         ours = dnn.mean_curve_time(cell)
         s = dnn.cells[cell].summary(MetricsConfig())
@@ -58,4 +58,4 @@ def claim_5(learners: dict[str, Learner]) -> Claim:
     reach.evidence = "; ".join(f"{r.label.split()[1]} {r.ours}" for r in reach.rows)
     for part in (low, high, when):
         part.evidence = f"ours {part.rows[0].ours}, the paper's {part.rows[0].paper}"
-    return Claim(TEXT, SHORT, SOURCE, SCOPE, parts_)
+    return Claim(TEXT, SHORT, SOURCE, SCOPE, all_parts)

@@ -41,10 +41,10 @@ def parts() -> tuple[Part, Part, Part, Part]:
 def claim_6(learners: dict[str, Learner]) -> Claim:
     dnn = learners["IV"]
     slower, factor_part, robust, example = parts()
-    parts_ = [slower, factor_part, robust, example]
+    all_parts = [slower, factor_part, robust, example]
     cells = [f"{s}_{n}" for s in ("regular", "scaffolded") for n in N_SOURCES]
     if not all(dnn.runs(c) for c in cells):
-        return Claim(TEXT, SHORT, SOURCE, SCOPE, parts_, ["Table IV has no runs of every transfer row yet."])
+        return Claim(TEXT, SHORT, SOURCE, SCOPE, all_parts, ["Table IV has no runs of every transfer row yet."])
     a, b = SLOWER
     ours = ratio_of_medians(dnn.times_to_threshold(a), dnn.times_to_threshold(b))
     factor = dnn.paper_time(a) / dnn.paper_time(b)
@@ -62,7 +62,7 @@ def claim_6(learners: dict[str, Learner]) -> Claim:
                                 reaches_threshold(ours_time is not None, paper_reaches),
                                 f"{s['runs_reaching_threshold']} of {s['n_runs']} runs reach it"))
     example.evidence = "; ".join(f"{r.label.split()[-1]} {r.ours}" for r in example.rows)
-    return Claim(TEXT, SHORT, SOURCE, SCOPE, parts_, _same_n_source(dnn))
+    return Claim(TEXT, SHORT, SOURCE, SCOPE, all_parts, _same_n_source(dnn))
 
 
 def _robustness(dnn: Learner) -> tuple[Row, str]:
