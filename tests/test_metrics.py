@@ -9,6 +9,8 @@ from mediated_transfer.metrics import (
     MetricsConfig,
     first_point_at_threshold,
     learning_span,
+    loss_after_learning,
+    median_time,
     reward_loss,
     summarise_runs,
     time_to_threshold,
@@ -59,6 +61,16 @@ def test_learning_span_runs_from_discovery_to_the_first_point_at_the_threshold()
     assert learning_span(70_000, STEPS, curve, 8.0) == 0
     assert learning_span(None, STEPS, curve, 8.0) is None  # never rewarded on a target task
     assert learning_span(25_000, STEPS, [0.0, 7.9, 0.0, 0.0, 0.0], 8.0) is None  # never reached
+
+
+def test_loss_after_learning_is_the_reward_loss_from_the_first_point_at_the_threshold():
+    assert loss_after_learning([0.0, 9.0, 7.0, 10.0], 8.0, 10.0) == 1.0 + 3.0 + 0.0  # from 9.0 on
+    assert loss_after_learning([0.0, 7.9, 0.0], 8.0, 10.0) is None  # never learned
+
+
+def test_medians_count_a_never_as_slower_than_any_value():
+    assert median_time([100, None, 300]) == 300
+    assert median_time([None, None, 100]) is None
 
 
 def test_time_to_threshold_tolerates_round_off_of_averaging_only():

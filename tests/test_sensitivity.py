@@ -7,8 +7,7 @@ import numpy as np
 import pytest
 
 from mediated_transfer.results import RunResult
-from mediated_transfer.sensitivity.measures import (
-    Measures, arm_gain, median_or_none, ratio_interval, threshold_time)
+from mediated_transfer.sensitivity.measures import Measures, arm_gain, ratio_interval, threshold_time
 
 STEPS = [100, 200, 300, 400]
 FAST = Measures(resamples=500)
@@ -27,11 +26,6 @@ def test_learning_span_runs_from_the_first_reward_to_the_first_point_at_the_thre
     assert _run([8, 9, 9, 9], first_reward=120).learning_span(8.0) == 0
     assert _run([0, 7.9, 0, 0], first_reward=150).learning_span(8.0) is None  # never reached
     assert _run([0, 0, 0, 0]).learning_span(8.0) is None  # never rewarded
-
-
-def test_medians_count_a_never_as_slower_than_any_value():
-    assert median_or_none([100, None, 300]) == 300
-    assert median_or_none([None, None, 100]) is None
 
 
 def test_threshold_time_is_the_papers_and_the_budget_when_never_reached():

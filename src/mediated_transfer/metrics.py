@@ -101,6 +101,15 @@ def learning_span(first_target_reward_step: int | None, steps, mean_rewards,
     return max(0, int(steps[reached]) - int(first_target_reward_step))
 
 
+def loss_after_learning(mean_rewards, threshold: float = _DEFAULT.threshold,
+                        max_reward: float = _DEFAULT.max_reward) -> float | None:
+    """The part of L_R from the first evaluation point with <R> >= threshold to the end: what a
+    run still loses once it has learned the task (greedy collapses, a lower plateau). None when
+    the run never gets there."""
+    reached = first_point_at_threshold(mean_rewards, threshold)
+    return None if reached is None else float(sum(max_reward - r for r in mean_rewards[reached:]))
+
+
 def summarise_runs(curves, steps, config: MetricsConfig = _DEFAULT) -> dict:
     """Everything the result tables need about one configuration, from its runs' curves.
 
@@ -148,7 +157,7 @@ def summarise_runs(curves, steps, config: MetricsConfig = _DEFAULT) -> dict:
         "time_to_threshold": time_to_threshold(steps, mean_curve, config.threshold, config.tolerance),
         "time_to_threshold_runs": per_run,
         "runs_reaching_threshold": sum(t is not None for t in per_run),
-        "time_to_threshold_median": _median_time(per_run),
+        "time_to_threshold_median": median_time(per_run),
     }
 
 
@@ -160,7 +169,9 @@ def _sem(values: np.ndarray) -> np.ndarray:
     return values.std(axis=0, ddof=1) / math.sqrt(n)
 
 
-def _median_time(per_run: list[int | None]) -> float | None:
+def median_time(per_run: list[int | None]) -> float | None:
+    """Median over runs of a step (time to threshold, discovery, learning span), a run that never
+    gets there (None) counted as slower than any that does; None when that median is never."""
     times = np.array([math.inf if t is None else t for t in per_run], dtype=float)
     median = float(np.median(times))
     return None if math.isinf(median) else median

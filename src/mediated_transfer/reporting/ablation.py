@@ -34,7 +34,8 @@ from ..results import RunResult
 from .collect import collect_sweep, runs_per_variant
 from .figures import RunPanel, plot_run_panels
 from .intervals import format_interval, iqm, ratio_of_means, sem
-from .reproduction import MAX_REWARD, NEVER_LEARN_COLUMNS, THRESHOLD, never_learn_row, never_learns
+from .reproduction.runs import MAX_REWARD, THRESHOLD, never_learns
+from .reproduction.tables import NEVER_LEARN_COLUMNS, never_learn_row
 
 EXPERIMENT = "dqn_failure_ablation"
 CELL = "none_0"

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from ..sensitivity.measures import loss_after_learning, median_or_none
+from ..metrics import loss_after_learning, median_time
 from .collect import CellRuns, variant_label
 from .figures import Bars
 from .formats import MARKDOWN
@@ -59,9 +59,10 @@ class Split:
 
     @classmethod
     def of(cls, cell: CellRuns, threshold: float, max_reward: float) -> "Split":
-        after = [a for r in cell.results if (a := loss_after_learning(r, threshold, max_reward)) is not None]
-        return cls(median_or_none([r.first_target_reward_step for r in cell.results]),
-                   median_or_none([r.learning_span(threshold) for r in cell.results]),
+        after = [a for r in cell.results
+                 if (a := loss_after_learning(r.mean_reward, threshold, max_reward)) is not None]
+        return cls(median_time([r.first_target_reward_step for r in cell.results]),
+                   median_time([r.learning_span(threshold) for r in cell.results]),
                    sum(after) / len(after) if after else None)
 
     def text(self) -> str:

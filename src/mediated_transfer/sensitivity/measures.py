@@ -12,8 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from ..metrics import _median_time as median_time  # a never-reached run counts as +inf
-from ..metrics import first_point_at_threshold, time_to_threshold
+from ..metrics import time_to_threshold
 from ..results import RunResult
 
 
@@ -41,20 +40,6 @@ class Interval:
 
     def contains(self, x: float) -> bool:
         return self.low <= x <= self.high
-
-
-def loss_after_learning(result: RunResult, threshold: float, max_reward: float) -> float | None:
-    """The part of L_R from the first evaluation point with <R> >= threshold to the end: what a
-    run still loses once it has learned the task (greedy collapses, a lower plateau). None when
-    the run never gets there."""
-    reached = first_point_at_threshold(result.mean_reward, threshold)
-    return None if reached is None else float(sum(max_reward - r for r in result.mean_reward[reached:]))
-
-
-def median_or_none(values: Sequence[int | None]) -> float | None:
-    """Median over runs, a None (never) counted as slower than any value; None if that median
-    is never."""
-    return median_time(list(values))
 
 
 def threshold_time(curves: np.ndarray, steps: Sequence[int], threshold: float, budget: int) -> int:

@@ -18,12 +18,13 @@ import numpy as np
 import pandas as pd
 
 from ..atomic import atomic_write_text
+from ..metrics import median_time
 from ..reporting.collect import CellRuns, collect_sweep
 from ..reporting.figures import _pyplot
 from ..reporting.formats import write_csv
 from ..reporting.intervals import sem
 from ..reporting.paper import paper_rows
-from .measures import ArmGain, Measures, arm_gain, median_or_none
+from .measures import ArmGain, Measures, arm_gain
 from ..env.scripted import random_success_rate
 from .study import Study, World
 
@@ -67,8 +68,8 @@ def measure(study: Study, measures: Measures, progress=print) -> list[WorldResul
         none = cells.get("none_0")
         if none is not None and none.results:
             runs = none.results
-            row.discovery_median = median_or_none([r.first_target_reward_step for r in runs])
-            row.learning_median = median_or_none([r.learning_span(threshold) for r in runs])
+            row.discovery_median = median_time([r.first_target_reward_step for r in runs])
+            row.learning_median = median_time([r.learning_span(threshold) for r in runs])
             losses = np.array([r.reward_loss for r in runs])
             row.reward_loss_none = float(losses.mean())
             row.reward_loss_none_sem = sem(losses)
