@@ -2,6 +2,7 @@
 scripted outcomes against its paper's description, and the record of what a run's episodes
 started from."""
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -396,6 +397,22 @@ def test_the_rule_words_a_ratio_by_its_interval():
     assert word((0.9, 0.7, 1.1)) == "undecided"
     assert verdict({"rbf": ["worse", "undecided"], "fsr": ["beats"]}) == ("YES", {"rbf": "NO", "fsr": "YES"})
     assert verdict({"rbf": ["undecided"], "fsr": ["worse"]})[0] == "NO"
+
+
+def test_one_run_per_arm_gives_no_interval_and_no_decision():
+    from mediated_transfer.curricula.measures import compare, time_ratio
+
+    def run(loss, seed=0):
+        return RunResult(algorithm="dqn", representation="network", strategy="x", n_source=0, seed=seed,
+                         budget=300, steps=[100, 200, 300], mean_reward=[10 - loss / 3] * 3, success_rate=[0.0] * 3,
+                         reward_loss=float(loss), time_to_threshold=None, source_phase_end=None,
+                         source_tasks_solved=0, wall_time_s=1.0, learning_steps_per_s=1.0)
+
+    one = compare("currot_0", [run(21)], "scaffolded_100", [run(15)])
+    assert one.ratio[0] == pytest.approx(1.4) and math.isnan(one.ratio[1]) and one.word == "undecided"
+    assert all(math.isnan(v) for v in time_ratio([run(21)], [run(15)], 8.0, 300))
+    two = compare("currot_0", [run(21), run(22, 1)], "scaffolded_100", [run(15), run(16, 1)])
+    assert two.word == "worse"  # every resample's ratio is above 1
 
 
 @pytest.mark.slow

@@ -111,7 +111,8 @@ def first_annulus_success(run: RunResult) -> int | None:
 
 def word(interval: tuple[float, float, float]) -> str:
     """The registered rule on a ratio of mean L_R (lower is better): BEATS when the whole 95 %
-    interval lies below 1, WORSE when it lies above 1, otherwise UNDECIDED."""
+    interval lies below 1, WORSE when it lies above 1, otherwise UNDECIDED (an undefined
+    interval, NaN, included)."""
     _, low, high = interval
     if high < 1:
         return BEATS
@@ -120,9 +121,18 @@ def word(interval: tuple[float, float, float]) -> str:
     return UNDECIDED
 
 
+MIN_RUNS = 2
+"""Runs each arm needs for an interval: one run per arm has no spread, its bootstrap interval
+is a point, and the rule would decide on one seed."""
+
+
 def compare(cell: str, runs: Sequence[RunResult], reference: str,
             reference_runs: Sequence[RunResult]) -> Comparison:
-    ratio = ratio_of_means([r.reward_loss for r in runs], [r.reward_loss for r in reference_runs])
+    losses, reference_losses = [r.reward_loss for r in runs], [r.reward_loss for r in reference_runs]
+    if min(len(losses), len(reference_losses)) < MIN_RUNS:
+        ratio = (float(np.mean(losses) / np.mean(reference_losses)), math.nan, math.nan)  # undecided, n/a
+    else:
+        ratio = ratio_of_means(losses, reference_losses)
     return Comparison(cell, reference, ratio, word(ratio))
 
 
@@ -131,6 +141,8 @@ def time_ratio(runs: Sequence[RunResult], reference_runs: Sequence[RunResult], t
     """Secondary, outside the rule: the mean curve's time to threshold over the reference's,
     with its bootstrap interval (runs resampled within each arm; a mean curve that never stays
     above the threshold counts as the budget, so the ratio is then a bound)."""
+    if min(len(runs), len(reference_runs)) < MIN_RUNS:
+        return math.nan, math.nan, math.nan  # as compare: no interval from one run
     curves = np.array([r.mean_reward for r in runs])
     reference = np.array([r.mean_reward for r in reference_runs])
     steps = runs[0].steps

@@ -145,10 +145,19 @@ def _dqn_section(dqn: Study, threshold: float, budget: int) -> str:
     curricula = tuple(c for c in dqn.cells if c not in (NONE, SCAFFOLDED))
     decision, words, _ = decision_table(dqn, arms, curricula, threshold, budget)
     lines = [f"## DQN, {dqn.groups[0].world} world (the registered rule's arms)", ""]
+    lines += _incomplete(sum(map(len, arms.values())), len(dqn.seeds) * len(dqn.cells))
     lines += _verdict_lines("Q1 for the DQN: does a picked curriculum beat the scaffolding?", {"DQN": words})
     if not decision.empty:
         lines += [_markdown(decision), ""]
     return "\n".join(lines + [_markdown(measures_table(dqn, group_measures(dqn, arms, failed[group], threshold)))])
+
+
+def _incomplete(done: int, expected: int) -> list[str]:
+    if done >= expected:
+        return []
+    return [f"**Incomplete: {done} of {expected} runs.** The verdicts below are provisional: they are the "
+            "registered rule applied to the runs there are, and may change as the sweep completes; an arm with "
+            "fewer than 2 runs has no interval and stays undecided.", ""]
 
 
 def _verdict_lines(question: str, words: dict[str, dict[str, str]]) -> list[str]:
@@ -178,9 +187,7 @@ def render(study: Study, parts: dict[str, dict], runs: dict[str, dict[str, list]
         "verdict is withdrawn: see [Superseded](#superseded-the-first-study).",
         "",
     ]
-    if done < expected:
-        lines += [f"**Incomplete: {done} of {expected} runs.** The verdicts below are provisional: they are the "
-                  "registered rule applied to the runs there are, and may change as the sweep completes.", ""]
+    lines += _incomplete(done, expected)
     lines += ["## Verdicts", ""]
     lines += _verdict_lines("Q1: does any automatic curriculum, in its own setting, beat the paper's scaffolding?",
                             {g: p["w1"] for g, p in parts.items()})
