@@ -286,6 +286,35 @@ def test_a_live_run_that_stops_early_is_not_left_running(settings, status):
     assert settings.client().get_run(run_id).info.lifecycle_stage == "deleted"
 
 
+
+def test_ctrl_c_during_a_store_write_takes_effect_after_it_so_the_run_still_ends_at_once(settings, monkeypatch):
+    """A Ctrl-C arriving inside a store write is held until the write ends: interrupted half-way,
+    SQLite would keep this process's lock, and ending the run KILLED would wait 20 s and fail."""
+    import os
+    import signal
+    import time
+
+    live = _live(settings)
+    real = live.client.log_batch
+    inside = []
+
+    def interrupted_write(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)  # a real Ctrl-C, delivered on the next bytecode
+        time.sleep(0.05)
+        inside.append(real(*args, **kwargs))  # reached only if the signal was held back
+
+    monkeypatch.setattr(live.client, "log_batch", interrupted_write)
+    with pytest.raises(KeyboardInterrupt):
+        live.evaluation(100, 1.0, 0.1)
+    assert inside  # the write finished before the interrupt was raised
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    run_id, started = live.run_id, time.monotonic()
+    live.end("KILLED")
+    assert time.monotonic() - started < 5
+    client = settings.client()
+    assert client.get_run(run_id).info.status == "KILLED"
+    assert [m.step for m in client.get_metric_history(run_id, "mean_reward")] == [100]
+
 def test_the_ui_links_open_each_experiments_runs(settings):
     experiment_id = tracking.prepare(settings, "table_y")
     assert tracking.runs_view_links(settings, "http://127.0.0.1:5000/") == [

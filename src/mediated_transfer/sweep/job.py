@@ -177,9 +177,10 @@ def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
         return None
     if cfg.tracking.enabled:
         tags = run_tags(cfg, folder, job.spec, job.variant, str(found.code.get("digest", "")))
-        tracking.log_run(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
-                         run_name=run_name(cfg, job.variant), result=found,
-                         params=tracking.flatten(job.resolved), tags=tags, artifacts=run_artifacts(folder))
+        with tracking.store_write():
+            tracking.log_run(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                             run_name=run_name(cfg, job.variant), result=found,
+                             params=tracking.flatten(job.resolved), tags=tags, artifacts=run_artifacts(folder))
     return found, "exists", stale
 
 
@@ -255,9 +256,10 @@ class _Computing:
             digest = code_version(spec, lockstep=lockstep is not None)["digest"]
             tags = run_tags(cfg, folder, spec, variant, digest)
             try:
-                self.live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
-                                             run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
-                                             tags=tags)
+                with tracking.store_write():
+                    self.live = tracking.LiveRun(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
+                                                 run_name=run_name(cfg, variant), params=tracking.flatten(resolved),
+                                                 tags=tags)
             except Exception as error:  # noqa: BLE001 - the store failed after the sweep's check
                 log.warning("%s: not followed in MLflow: %s", run_label(cfg, variant),
                             tracking.not_logged(_settings(cfg), error))

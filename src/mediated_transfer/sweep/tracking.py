@@ -38,6 +38,8 @@ import json
 import logging
 import math
 import os
+import signal
+import threading
 import time
 import warnings
 from collections.abc import Iterable, Mapping
@@ -198,6 +200,28 @@ def _store_lock(settings: TrackingSettings):
         os.close(fd)  # releases the lock
 
 
+@contextlib.contextmanager
+def store_write():
+    """The ``with`` block writes to the store whole: Ctrl-C or SIGTERM arriving meanwhile takes
+    effect as it ends. Interrupted half-way, an SQLite write leaves this process holding the
+    database's lock, so the run's last write (ending it KILLED) would wait the busy timeout
+    (20 s) and fail, the MLflow run left RUNNING. Only the main thread can hold signals back;
+    elsewhere the block runs unchanged."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+    caught = (signal.SIGINT, signal.SIGTERM)
+    previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in caught}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        for s in dict.fromkeys(held):
+            signal.raise_signal(s)  # now, to the handler it was meant for
+
+
 def _experiment_id(client, settings: TrackingSettings, name: str) -> str:
     from mlflow.exceptions import MlflowException
 
@@ -318,7 +342,8 @@ class LiveRun:
         if self.run_id is None:
             return
         try:
-            log(self.run_id)
+            with store_write():
+                log(self.run_id)
         except Exception as error:  # noqa: BLE001 - any store or network error
             warnings.warn(f"MLflow stopped following this run, its result is kept: {not_logged(self.settings, error)}",
                           RuntimeWarning, stacklevel=2)
