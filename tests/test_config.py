@@ -349,7 +349,7 @@ def test_tuned_values_apply_to_their_learner_only_and_are_searched_keys(path):
 def test_a_run_made_before_a_key_existed_is_the_same_run_but_another_value_is_not(tmp_path):
     from omegaconf import OmegaConf
 
-    from mediated_transfer.config.spec import check_same_run
+    from mediated_transfer.provenance.judge import check_same_run
     from mediated_transfer.results import RunResult
 
     cfg = compose_config(["experiment=table2_rbf", "cell=none_0", "seed=0"])

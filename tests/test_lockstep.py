@@ -19,6 +19,7 @@ from mediated_transfer.learners.dqn import DQNConfig, DQNLearner
 from mediated_transfer.lockstep.group import PerSeedLearners
 from mediated_transfer.lockstep.run import RunHooks, check_group, execute_lockstep, make_group
 from mediated_transfer.lockstep.stacked import StackedDQN
+from mediated_transfer.provenance.judge import stale
 from mediated_transfer.run import RunSpec, RunStreams, execute_run
 
 # A small network and an early start, so that updates, target copies and the epsilon decay all
@@ -257,7 +258,7 @@ def test_a_lockstep_sweep_writes_the_runs_of_a_sweep_without_it_and_resumes(tmp_
     # Each run keeps its own folder and record; those computed in a group say so.
     assert grouped["none_0/seed=0"].code["lockstep_runs"] == 2 and grouped["none_0/seed=0"].code["lockstep"]
     assert "lockstep" not in grouped["none_0/seed=2"].code  # the cell's last seed ran alone
-    assert all(r.stale() is None for r in grouped.values())
+    assert all(stale(r) is None for r in grouped.values())
     folder = tmp_path / "lockstep" / "multirun" / "table4_dnn" / "smoke" / "regular_1" / "seed=1"
     assert (folder / ".hydra" / "config.yaml").is_file() and (folder / "learner.pt").is_file()
     # Resumed: the missing runs of a cell are grouped, the finished one is only found.

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from mediated_transfer.config.spec import spec_values
+from mediated_transfer.config.spec import spec_from_dict, spec_values
+from mediated_transfer.provenance.judge import stale
 from mediated_transfer.results import RESULT_FILE, RunResult
-from mediated_transfer.run import execute_run, spec_from_dict
+from mediated_transfer.run import execute_run
 
 from .optional import needs_deep
 
@@ -33,5 +34,5 @@ def test_a_committed_paper_scale_run_reproduces_bit_for_bit(run):
 def test_every_committed_run_of_the_papers_tables_is_current(table):
     folders = [p.parent for p in (MULTIRUN / table / "paper").glob(f"*/seed=*/{RESULT_FILE}")]
     assert len(folders) == 220
-    stale = [f"{f}: {why}" for f in folders if (why := RunResult.read(f).stale())]
-    assert not stale, stale[:3]
+    found = [f"{f}: {why}" for f in folders if (why := stale(RunResult.read(f)))]
+    assert not found, found[:3]

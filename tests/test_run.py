@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from mediated_transfer import run as run_module
+from mediated_transfer.config.spec import spec_from_dict
 from mediated_transfer.env import WorldConfig, sample_tasks
 from mediated_transfer.env.mediated_env import MediatedInteractionEnv
 from mediated_transfer.learners.factory import make_learner
@@ -143,10 +144,10 @@ def test_bad_input_fails_before_any_work(monkeypatch, changes, message):
 
 def test_spec_from_dict_names_unknown_keys():
     with pytest.raises(ValueError, match=r"run: unknown key\(s\) budgett; allowed: algorithm,"):
-        run_module.spec_from_dict({"budgett": 10})
+        spec_from_dict({"budgett": 10})
     with pytest.raises(ValueError, match=r"env: unknown key\(s\) goal_radiuss; allowed: interaction_radius,"):
-        run_module.spec_from_dict({"world": {"goal_radiuss": 2.0}})
-    spec = run_module.spec_from_dict({"world": {"goal_radius": 3.0}, "seed": 4})
+        spec_from_dict({"world": {"goal_radiuss": 2.0}})
+    spec = spec_from_dict({"world": {"goal_radius": 3.0}, "seed": 4})
     assert spec.world.goal_radius == 3.0 and spec.seed == 4
 
 

@@ -13,6 +13,7 @@ from PIL import Image
 
 from mediated_transfer import evaluate as evaluate_cli
 from mediated_transfer.env import MediatedInteractionEnv, animate
+from mediated_transfer.provenance.judge import stale
 from mediated_transfer.results import RunResult
 from mediated_transfer.run import RunSpec, execute_run
 from mediated_transfer.stored import codec
@@ -145,7 +146,7 @@ def test_a_recomputed_run_does_not_keep_the_learner_of_the_run_before(tmp_path, 
     stored["checksum"] = codec.checksum(stored)  # sealed as the committed runs are
     (folder / "result.json").write_text(json.dumps(stored))
     _smoke_run(tmp_path, source_cache, "rerun_stale=true", "save_learner=false")
-    assert RunResult.read(folder).stale() is None and not (folder / LINEAR_FILE).exists()
+    assert stale(RunResult.read(folder)) is None and not (folder / LINEAR_FILE).exists()
 
 
 def test_saved_learners_stay_out_of_git():

@@ -13,6 +13,7 @@ from hydra.core.utils import JobReturn, JobStatus
 from omegaconf import OmegaConf
 
 from mediated_transfer.config.compose import ConfigError
+from mediated_transfer.provenance import judge
 from mediated_transfer.slurm import cluster, errors, jobs, watch
 from mediated_transfer.slurm.cluster import ClusterError, Partition
 from mediated_transfer.slurm.ledger import Ledger
@@ -48,9 +49,10 @@ def test_plan_composes_once_per_cell_and_sets_each_seed(tmp_path):
 
 def test_finished_runs_are_not_submitted_but_stale_ones_are_when_recomputed(tmp_path, monkeypatch):
     stale = {"b_1/seed=0"}
-    monkeypatch.setattr(jobs.RunResult, "read", staticmethod(lambda folder: SimpleNamespace(
+    monkeypatch.setattr(judge.RunResult, "read", staticmethod(lambda folder: SimpleNamespace(
         stale=lambda: "other code" if Path(folder).relative_to(tmp_path).as_posix() in stale else None,
         **_run_of(Path(folder)))))
+    monkeypatch.setattr(judge, "stale", lambda result: result.stale())  # the judge's word on a fake run
     _finish(tmp_path / "a_1/seed=0")
     _finish(tmp_path / "b_1/seed=0")
     _finish(tmp_path / "b_1/seed=1")
@@ -77,7 +79,8 @@ def test_is_finished_agrees_with_run_job_skipping(tmp_path, monkeypatch):
     assert not jobs.is_finished(tmp_path / "missing", rerun_stale=False)
     _finish(tmp_path / "x")
     for stale in (None, "other code"):
-        monkeypatch.setattr(jobs.RunResult, "read", staticmethod(lambda folder: SimpleNamespace(stale=lambda: stale)))
+        monkeypatch.setattr(judge.RunResult, "read", staticmethod(lambda folder: SimpleNamespace(stale=lambda: stale)))
+        monkeypatch.setattr(judge, "stale", lambda result: result.stale())
         for rerun_stale in (False, True):
             assert jobs.is_finished(tmp_path / "x", rerun_stale) == (not (stale and rerun_stale))
 

@@ -18,7 +18,8 @@ from pathlib import Path
 import pytest
 
 from mediated_transfer.config.compose import ConfigError, compose_config
-from mediated_transfer.config.spec import check_same_run, run_spec
+from mediated_transfer.config.spec import run_spec
+from mediated_transfer.provenance.judge import check_same_run
 from mediated_transfer.reporting.__main__ import main as reporting_main
 from mediated_transfer.results import CURVE_FILE, RESULT_FILE, DamagedResult, RunResult
 from mediated_transfer.slurm.jobs import is_finished

@@ -21,6 +21,7 @@ from mediated_transfer.sweep import tracking
 from mediated_transfer.app import cli, run_job
 from mediated_transfer.config.compose import CONF_DIR, ConfigError
 from mediated_transfer.reporting.__main__ import main as reporting_main
+from mediated_transfer.provenance.judge import stale
 from mediated_transfer.reporting.paper import paper_rows
 from mediated_transfer.results import RunResult
 from mediated_transfer.stored import codec
@@ -218,21 +219,21 @@ def test_a_result_of_other_code_is_reported_stale_and_recomputed_on_request(root
     _run_cli(*args)
     folder = root / "runs" / "linear_q_rbf" / "smoke" / "none_0" / "seed=1"
     result = RunResult.read(folder)
-    assert result.stale() is None and result.results_format == 2
+    assert stale(result) is None and result.results_format == 2
     assert len(result.code["digest"]) == 16 and "commit" in result.code and "dirty" in result.code
 
     stored = json.loads((folder / "result.json").read_text())
     stored["code"] = {"commit": "0" * 40, "dirty": False, "digest": "0" * 16}  # as if older code wrote it
     stored["checksum"] = codec.checksum(stored)  # sealed as the committed runs are
     (folder / "result.json").write_text(json.dumps(stored))
-    assert "computed by other code: commit 0000000000" in RunResult.read(folder).stale()
+    assert "computed by other code: commit 0000000000" in stale(RunResult.read(folder))
     _run_cli(*args)
     log = (folder / "mediated_transfer.log").read_text()
     assert "found, STALE (computed by other code" in log and "rerun_stale=true" in log
     assert RunResult.read(folder).code["digest"] == "0" * 16  # reused as it is, but not silently
 
     _run_cli(*args, "rerun_stale=true")
-    assert RunResult.read(folder).stale() is None  # recomputed by this code
+    assert stale(RunResult.read(folder)) is None  # recomputed by this code
 
 
 def test_a_variant_sweep_is_reported_apart_from_the_baseline_and_compared_with_it(root, source_cache, capsys):

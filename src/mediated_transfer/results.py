@@ -4,8 +4,9 @@
 ``curve.csv`` holds the evaluation curve (learning step, mean reward <R>, success rate).
 Both are written atomically (temporary file, then rename), so an interrupted run never leaves
 a half-written result that a later sweep would mistake for a finished one. How they are encoded
-(strict JSON, a checksum) and judged when read back (a damaged run is named, never used): the
-``stored`` package.
+(strict JSON, a checksum) and checked when read back (a damaged run is named, never used): the
+``stored`` package. A record only: whether a stored run is reused, recomputed, set aside or
+reported stale is judged by provenance/judge.py, which knows the code and the config.
 """
 
 from __future__ import annotations
@@ -99,19 +100,6 @@ class RunResult:
         if data.get("reward_loss") is None:  # written as null: not a number
             data["reward_loss"] = math.nan
         return cls(**data)
-
-    def stale(self) -> str | None:
-        """Why this result no longer matches the code (provenance.staleness); None if current."""
-        from .config.spec import spec_values
-        from .provenance import staleness
-        from .run import spec_from_dict
-
-        if self.config:
-            spec = spec_from_dict(spec_values(self.config))
-        else:  # its code is still known by its options' names (the built-ins')
-            spec = spec_from_dict({"algorithm": self.algorithm, "representation": self.representation,
-                                   "strategy": self.strategy, "n_source": self.n_source})
-        return staleness(self.code, self.results_format, spec)
 
     @staticmethod
     def exists(folder: str | os.PathLike) -> bool:

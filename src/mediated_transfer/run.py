@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
 from . import metrics, plugins
-from .config.mapping import config_from_mapping
 from .env import WorldConfig, sample_tasks
 from .env.mediated_env import MediatedInteractionEnv
 from .env.task import check_room
@@ -398,15 +397,3 @@ def run_result(spec: RunSpec, curve: Curve, strategy: Strategy, learner_stats: d
         failure=failure,
         choices=choices,
     )
-
-
-def spec_from_dict(values: dict[str, Any]) -> RunSpec:
-    """A RunSpec from plain values (e.g. a resolved Hydra config); unknown keys are errors."""
-    values = dict(values)
-    world = values.pop("world", None)
-    spec = config_from_mapping(RunSpec, values, "run")
-    if world is not None:
-        if not isinstance(world, WorldConfig):
-            world = config_from_mapping(WorldConfig, world, "env")
-        spec = replace(spec, world=world)
-    return spec

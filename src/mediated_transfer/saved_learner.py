@@ -85,7 +85,7 @@ def load_learner(folder: str | os.PathLike) -> tuple["Learner", "RunSpec"]:
     SavedLearnerError (one line) if the folder has none, or the file cannot be used.
     """
     from .learners.factory import make_learner
-    from .run import spec_from_dict
+    from .config.spec import spec_from_dict
 
     folder = Path(folder)
     if not folder.is_dir():

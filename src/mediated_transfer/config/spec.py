@@ -1,20 +1,20 @@
-"""A composed config (or the resolved config a result recorded) as the RunSpec it runs."""
+"""A composed config (or the resolved config a result recorded) as the RunSpec it runs, and how
+two runs' configs compare."""
 
 from __future__ import annotations
 
 import hashlib
 import json
 from collections.abc import Mapping
-from dataclasses import asdict
-from pathlib import Path
+from dataclasses import asdict, replace
 from typing import TYPE_CHECKING, Any
 
 from omegaconf import DictConfig, OmegaConf
 
 from .compose import ConfigError
+from .mapping import config_from_mapping
 
 if TYPE_CHECKING:
-    from ..results import RunResult
     from ..run import RunSpec
 
 
@@ -47,6 +47,22 @@ def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
+def spec_from_dict(values: Mapping[str, Any]) -> "RunSpec":
+    """A RunSpec from plain values (``spec_values``' or a saved learner's); unknown keys are errors."""
+    # Imported here: the learners and the environment load only when a run is configured.
+    from ..env.config import WorldConfig
+    from ..run import RunSpec
+
+    values = dict(values)
+    world = values.pop("world", None)
+    spec = config_from_mapping(RunSpec, values, "run")
+    if world is not None:
+        if not isinstance(world, WorldConfig):
+            world = config_from_mapping(WorldConfig, world, "env")
+        spec = replace(spec, world=world)
+    return spec
+
+
 def _option(node: Any) -> tuple[str, str | None, dict[str, Any]]:
     """(name, _target_, parameters) of a group's node; a result recorded before strategies were
     nodes holds the strategy's name alone (its target is then the built-in's of that name)."""
@@ -59,9 +75,6 @@ def _option(node: Any) -> tuple[str, str | None, dict[str, Any]]:
 
 def run_spec(cfg: Mapping[str, Any]) -> "RunSpec":
     """The validated RunSpec of a config; ConfigError (one line) before any work if it cannot run."""
-    # Imported here: the learners and the environment load only when a run is configured.
-    from ..run import spec_from_dict
-
     try:
         _check_launch_keys(cfg)
         return spec_from_dict(spec_values(cfg)).validate()
@@ -133,44 +146,6 @@ def spec_digest(spec: "RunSpec") -> str:
 
 def _plain(node: Any) -> Any:
     return OmegaConf.to_container(node, resolve=True) if isinstance(node, DictConfig) else node
-
-
-def check_same_run(result: "RunResult", spec: "RunSpec", folder: Path) -> None:
-    """ConfigError naming every difference if ``folder``'s result was computed from another config;
-    DamagedResult if it is another cell's or seed's run (moved or copied there) or its recorded
-    config cannot be read as a run."""
-    from ..stored.check import check_place
-
-    # Another cell's or seed's run is not this folder's run at all: set aside, not refused.
-    check_place(folder, result, f"{spec.strategy}_{spec.n_source}", spec.seed)
-    # A folder is named after the cell, the seed and the swept keys; a result computed with
-    # other values there (e.g. an override excluded from the folder name) must not be passed
-    # off as this run's.
-    if not result.config:
-        raise ConfigError(f"{folder / 'result.json'} has no recorded config; delete the folder to rerun it")
-    try:
-        stored = comparable(run_spec(result.config))
-    except ConfigError as error:
-        # e.g. a value earlier code wrote as null (an infinity before it was written as "inf"):
-        # the run cannot be identified, so it cannot be reused; it is set aside, not refused.
-        from ..stored.check import DamagedResult
-
-        raise DamagedResult(folder / "result.json", f"its recorded config is not a run this code "
-                                                    f"can read ({error})") from None
-    wanted = comparable(spec)
-    # A key added since the run was made is missing from its record: it ran with what the key's
-    # default keeps (a new key's default keeps the old behaviour), not with another value. Its
-    # code digest differs anyway, so the run shows as stale (rerun_stale=true recomputes it).
-    for group in ("algorithm_params", "representation_params", "strategy_params", "world"):
-        if isinstance(stored.get(group), dict) and isinstance(wanted.get(group), dict):
-            stored[group] = {**{k: v for k, v in wanted[group].items() if k not in stored[group]},
-                             **stored[group]}
-    detail = differences(stored, wanted)
-    if detail:
-        raise ConfigError(
-            f"{folder} holds a finished run of another configuration ({detail}). Use another "
-            "paths.root, or delete the folder to recompute it."
-        )
 
 
 def differences(stored: Mapping[str, Any], wanted: Mapping[str, Any],

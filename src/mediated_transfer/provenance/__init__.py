@@ -14,6 +14,9 @@ the digests of one commit to those of a later one, per run kind, and says why th
 same (certify.py writes a step). The digest covers this project's and its plugins' code only:
 another numpy, torch or pymunk version, or another Python, is not seen by it; the versions a run
 computed with are recorded beside it (``versions``), for people comparing runs across machines.
+
+Whether a stored run is reused, recomputed, set aside or reported stale is judged in one place,
+judge.py, for the sweep, the launchers and the reports alike.
 """
 
 from __future__ import annotations

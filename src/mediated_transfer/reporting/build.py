@@ -19,8 +19,9 @@ from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 
-from ..sweep import tracking
 from ..metrics import MetricsConfig
+from ..provenance.judge import stale
+from ..sweep import tracking
 from .collect import CellRuns, collect_sweep, runs_per_variant, variant_label
 from .collect import summaries as cell_summaries
 from .compose import ReportError, variant_of
@@ -42,7 +43,7 @@ class Report:
     variant: str = ""
     summary_runs: list[str] = field(default_factory=list)
     stale: list[str] = field(default_factory=list)
-    """One line per run computed by other code than the current (provenance.py)."""
+    """One line per run computed by other code than the current (provenance/judge.py)."""
     left_out: list[str] = field(default_factory=list)
     """One line per damaged run left out of the tables (its file, what is wrong)."""
 
@@ -73,14 +74,14 @@ def build_report(cfg: DictConfig) -> Report:
     metrics_cfg = MetricsConfig(max_reward=float(cfg.env.success_reward), threshold=float(cfg.threshold))
     summaries = cell_summaries(cells, metrics_cfg)
     strategies = {name: (c.strategy, c.n_source) for name, c in cells.items()}
-    stale = [f"{name} seed={r.seed}: {why}" for name, c in cells.items() for r in c.results
-             if (why := r.stale()) is not None]
+    stale_lines = [f"{name} seed={r.seed}: {why}" for name, c in cells.items() for r in c.results
+                   if (why := stale(r)) is not None]
 
     header = TableHeader(
         title=str(cfg.report.title), scale=str(cfg.scale.name), budget=int(cfg.scale.budget),
         eval_points=int(cfg.scale.eval_points), eval_episodes=int(cfg.scale.eval_episodes),
         runs_per_row=int(cfg.scale.seeds), threshold=metrics_cfg.threshold,
-        max_reward=metrics_cfg.max_reward, variant=variant, stale_runs=len(stale), left_out_runs=len(left_out))
+        max_reward=metrics_cfg.max_reward, variant=variant, stale_runs=len(stale_lines), left_out_runs=len(left_out))
     failed = {name: len(c.failed) for name, c in cells.items() if c.failed}
     rows = table_rows(summaries, strategies, paper_rows(str(cfg.report.paper_table)), header.runs_per_row,
                       failed)
@@ -99,7 +100,7 @@ def build_report(cfg: DictConfig) -> Report:
         figure = plot_curves(curves, header.threshold, header.max_reward, title, subtitle,
                              out_dir / f"{cfg.report.figure}.png")
     report = Report(str(cfg.name), tables, figure, sum(len(c.results) for c in cells.values()), variant,
-                    stale=stale, left_out=left_out)
+                    stale=stale_lines, left_out=left_out)
     if cfg.tracking.enabled:
         report.summary_runs = _log_summaries(cfg, variant, cells, summaries, tables + ([figure] if figure else []))
     return report

@@ -5,9 +5,9 @@ and ``<sweep_dir>/<cell>/seed=<k>/<variant>/result.json`` per finished run of a 
 the variant is Hydra's override_dirname of the run (its overrides besides table cell, seed, scale
 and locations; conf/config.yaml: hydra.sweep.subdir). A report reads one variant only, so the
 baseline and its variants never mix. Unfinished runs have no result.json and are not there yet.
-A damaged run (results.py reads every run validated), or another cell's or seed's run moved or
-copied into a folder (stored/check.py: check_place), is left out and named, one line each:
-tables are built from the runs that can be trusted, and say how many were left out.
+A run the judge sets aside (provenance/judge.py: a damaged run, or another cell's or seed's run
+moved or copied into a folder) is left out and named, one line each: tables are built from the
+runs that can be trusted, and say how many were left out.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from ..metrics import MetricsConfig, summarise_runs
-from ..results import RESULT_FILE, DamagedResult, RunResult
-from ..stored.check import check_place
+from ..provenance.judge import judge
+from ..results import RESULT_FILE, RunResult
 
 BASELINE = ""
 """The variant of a sweep run with no overrides beyond table cell, seed and locations."""
@@ -80,16 +80,15 @@ def collect_sweep(sweep_dir: str | Path, algorithm: str | None = None,
     cells: dict[str, CellRuns] = {}
     for seed_dir in sorted(sweep_dir.glob("*/seed=*")):
         folder = seed_dir / variant
-        if not RunResult.exists(folder):
-            continue
-        try:
-            result = RunResult.read(folder)
-            check_place(folder, result, seed_dir.parent.name, seed_dir.name.removeprefix("seed="))
-        except DamagedResult as damaged:
+        verdict = judge(folder, place=(seed_dir.parent.name, seed_dir.name.removeprefix("seed=")))
+        if verdict.damaged is not None:  # set aside by a sweep, left out by a report
             if left_out is None:
-                print(f"left out: {damaged}", file=sys.stderr)
+                print(f"left out: {verdict.damaged}", file=sys.stderr)
             else:
-                left_out.append(str(damaged))
+                left_out.append(str(verdict.damaged))
+            continue
+        result = verdict.result
+        if result is None:  # not finished (yet)
             continue
         expected = {"algorithm": algorithm, "representation": representation, "budget": budget}
         for key, wanted in expected.items():

@@ -14,8 +14,7 @@ from pathlib import Path
 from omegaconf import DictConfig
 
 from ..config.compose import ConfigError
-from ..results import DamagedResult, RunResult
-from ..stored.check import check_place
+from ..provenance.judge import judge
 from ..sweep import _with_seed, _without_seed
 
 
@@ -33,16 +32,8 @@ def is_finished(folder: Path, rerun_stale: bool, place: tuple[str, int] | None =
     """True when sweep.job.run_job would skip the run in ``folder``: a result is there, it is not
     damaged, it is the run of ``place`` (the folder's table cell and seed, when given), not
     another's moved or copied there, and it is not a stale one that ``rerun_stale`` asks to
-    recompute."""
-    if not RunResult.exists(folder):
-        return False
-    try:
-        found = RunResult.read(folder)
-        if place is not None:
-            check_place(folder, found, *place)
-    except DamagedResult:
-        return False  # its job sets it aside and computes it again
-    return not (rerun_stale and found.stale() is not None)
+    recompute (provenance/judge.py: its verdict is reuse or reported stale)."""
+    return judge(folder, place=place, rerun_stale=rerun_stale).kept
 
 
 def plan_runs(job_overrides: Sequence[Sequence[str]], initial_index: int,

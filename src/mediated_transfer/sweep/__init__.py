@@ -34,8 +34,8 @@ from omegaconf import DictConfig, OmegaConf
 
 from ..atomic import atomic_write_text
 from ..config.compose import ConfigError, compose_config, prepare_overrides
-from ..config.spec import check_same_run, run_spec
-from ..results import DamagedResult, RunResult
+from ..config.spec import run_spec
+from ..provenance.judge import judge
 from .identity import run_where
 
 if TYPE_CHECKING:
@@ -76,19 +76,14 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
         cfg = _with_seed(configs[_without_seed(job)], job)
         sweep_dir, run = Path(cfg.hydra.sweep.dir), str(cfg.hydra.sweep.subdir).rstrip("/")
         # A finished run of another configuration in a job's folder stops the sweep now, not
-        # as a traceback halfway through it.
+        # as a traceback halfway through it (the judge raises ConfigError). A damaged run is
+        # set aside by its job (under the run's claim: another launch may be writing it right
+        # now), saying why; like a stale run recomputed, it is not finished till then.
         folder = sweep_dir / run
-        if RunResult.exists(folder):
-            try:
-                found = RunResult.read(folder)
-                check_same_run(found, replace(specs[_without_seed(job)], seed=int(cfg.seed)), folder)
-            except DamagedResult:
-                # Its job sets it aside and computes it again (under the run's claim: another
-                # launch may be writing it right now), saying why; it is not finished till then.
-                recompute.setdefault(sweep_dir, []).append(run)
-            else:
-                if cfg.rerun_stale and found.stale():
-                    recompute.setdefault(sweep_dir, []).append(run)
+        verdict = judge(folder, replace(specs[_without_seed(job)], seed=int(cfg.seed)),
+                        rerun_stale=bool(cfg.rerun_stale))
+        if verdict.found and not verdict.kept:
+            recompute.setdefault(sweep_dir, []).append(run)
         plans.setdefault(sweep_dir, []).append(run)
         planned.append(_planned(cfg, folder, base))
     _prepare_tracking(base)

@@ -23,8 +23,9 @@ from hydra.errors import CompactHydraException
 from omegaconf import DictConfig, OmegaConf
 
 from ..config.compose import ConfigError, first_line
-from ..config.spec import check_same_run, comparable, differences, run_spec
-from ..results import DamagedResult, RunResult
+from ..config.spec import comparable, differences, run_spec
+from ..provenance.judge import RECOMPUTE, SET_ASIDE, judge
+from ..results import RunResult
 from ..stored.aside import set_aside
 from . import faults, progress, tracking
 from .claim import claimed, holder
@@ -155,26 +156,25 @@ def _check_holder(job: _JobRef) -> None:
 
 
 def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
-    """(result, "exists", why stale) of a finished run in the job's folder, logged to MLflow
-    from its files unless MLflow has it already; None when the run must be computed (a damaged
-    run's files are set aside first, with one warning line)."""
+    """(result, "exists", why stale) of a finished run in the job's folder that the judge
+    (provenance/judge.py) reuses, logged to MLflow from its files unless MLflow has it already;
+    None when the run must be computed (a damaged run's files are set aside first, with one
+    warning line)."""
     cfg, folder = job.cfg, job.folder
-    if not RunResult.exists(folder):
-        return None
     try:
-        found = RunResult.read(folder)
-        check_same_run(found, job.spec, folder)
+        verdict = judge(folder, job.spec, rerun_stale=bool(cfg.rerun_stale))
     except ConfigError as other:  # finished by a sweep of another configuration since preflight
         log.error("%s", other)
         raise FolderClash(str(other)) from None
-    except DamagedResult as damaged:
+    if verdict.action == SET_ASIDE:
         moved = set_aside(folder)
-        log.warning("%s: %s; set aside as %s, computing the run again", job.label, damaged,
+        log.warning("%s: %s; set aside as %s, computing the run again", job.label, verdict.reason,
                     ", ".join(p.name for p in moved))
         return None
-    stale = found.stale()
-    if stale and cfg.rerun_stale:
+    if verdict.action == RECOMPUTE:
         return None
+    found, stale = verdict.result, verdict.stale
+    assert found is not None  # reused: current, or reported stale
     if cfg.tracking.enabled:
         tags = run_tags(cfg, folder, job.spec, job.variant, str(found.code.get("digest", "")))
         with tracking.store_write():

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ...metrics import MetricsConfig, first_point_at_threshold
+from ...provenance.judge import stale
 from ..collect import CellRuns, collect_sweep
 from ..paper import paper_rows
 
@@ -46,9 +47,9 @@ class Learner:
         return sum(map(never_learns, self.runs(cell)))
 
     def stale(self) -> int:
-        """Runs computed by other code than the current (provenance): 0 when every verdict is
-        today's code's."""
-        return sum(bool(r.stale()) for c in self.cells.values() for r in (*c.results, *c.failed))
+        """Runs computed by other code than the current (provenance/judge.py): 0 when every
+        verdict is today's code's."""
+        return sum(bool(stale(r)) for c in self.cells.values() for r in (*c.results, *c.failed))
 
     def mean_curve_time(self, cell: str) -> int | None:
         """The time to threshold of the row's mean curve: how the paper reads its own."""
