@@ -17,6 +17,7 @@ with ``carry_over --retake``).
 
 from __future__ import annotations
 
+import functools
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -112,9 +113,10 @@ class Kind:
         return run_digest(self.spec(), self.lockstep)
 
 
+@functools.cache
 def kinds() -> dict[str, Kind]:
     """Every kind with a standing run, by key: the built-in options' (certify.builtin_kinds) and
-    the plugin strategies' with every learner of the project's loop."""
+    the plugin strategies' with every learner of the project's loop (read once per process)."""
     from ..learners.factory import ALGORITHMS, learner_target
     from ..plugins import owner_class
     from .certify import builtin_kinds
