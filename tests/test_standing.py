@@ -24,10 +24,11 @@ COMMAND = "make carry-over (python -m mediated_transfer.provenance.carry_over)"
 
 
 def _watched() -> dict[str, standing.Kind]:
-    # Without torch a deep learner's code, and so its digest, is another (test_provenance.py).
+    # Without torch the code of a deep learner, and of the lockstep loop (its stacked networks),
+    # is another, and so is its digest (test_provenance.py): those kinds are checked with it.
     kinds = standing.kinds()
     return {key: kind for key, kind in kinds.items()
-            if DEEP or not (deep_option(kind.algorithm) or deep_option(kind.representation))}
+            if DEEP or not (deep_option(kind.algorithm) or deep_option(kind.representation) or kind.lockstep)}
 
 
 def test_every_run_kinds_code_is_the_code_its_fingerprint_was_taken_at():
@@ -136,3 +137,17 @@ def test_an_accepted_change_records_the_new_fingerprint_and_old_results_stay_sta
     entry = record.load(fingerprints)[TOY.key]
     assert (entry.fingerprint, entry.digest, entry.why) == ("e" * 64, TOY.digest(), "the toy learns otherwise now")
     assert translations.read_text() == steps and _old_result_is_stale()
+
+
+def test_a_kind_whose_short_run_fails_is_named_and_nothing_is_written(toy, monkeypatch):
+    translations, fingerprints = toy
+
+    def fails(kind, cache_dir=None):
+        raise RuntimeError("a learner that cannot be built\nsecond line")
+
+    monkeypatch.setattr(standing, "standing_fingerprint", fails)
+    before = translations.read_bytes(), fingerprints.read_bytes()
+    outcome = carry_over(accept="even when accepted", say=lambda line: None)
+    assert outcome.refused == {TOY.key: f"{TOY.key}: its standing run failed (RuntimeError: a learner that cannot "
+                                        "be built)"}
+    assert (translations.read_bytes(), fingerprints.read_bytes()) == before

@@ -60,20 +60,21 @@ def carry_over(accept: str | None = None, retake: bool = False, only: Sequence[s
     entries = record.load()
     for key in sorted(set(entries) - set(kinds)):
         say(f"{key}: in fingerprints.json but no longer a run kind here (left as it is)")
+    say(f"code digests of {len(only or kinds)} run kinds ...")
     now = {key: kinds[key].digest() for key in (only or kinds)}
     todo = [key for key in now if retake or key not in entries or entries[key].digest != now[key]]
     if not todo:
         say(f"all {len(now)} run kinds' fingerprints were taken at their current code digest: nothing to run")
         return Outcome()
     say(f"standing runs of {len(todo)} of {len(now)} run kinds ({_reasons(todo, entries, now)}):")
-    taken = _take(todo, kinds, entries, now, say)
+    taken = _take(todo, kinds, entries, say)
 
     outcome, commit, dirty, versions = Outcome(), _git("rev-parse", "HEAD"), _dirty(), _versions()
     updated = dict(entries)
     for key, found in taken.items():
         old = entries.get(key)
-        if found.startswith("error: "):
-            outcome.refused[key] = f"{key}: its standing run failed ({found[7:]})"
+        if isinstance(found, Exception):
+            outcome.refused[key] = f"{key}: its standing run failed ({_one_line(found)})"
         elif old is not None and found == old.fingerprint:
             (outcome.carried if old.digest != now[key] else outcome.reproduced).append(key)
             updated[key] = replace(old, digest=now[key], commit=commit, dirty=dirty, versions=versions)
@@ -93,18 +94,18 @@ def carry_over(accept: str | None = None, retake: bool = False, only: Sequence[s
     return outcome
 
 
-def _take(todo: list[str], kinds: dict, entries: dict, now: dict, say) -> dict[str, str]:
-    """Each kind's fingerprint now ("error: ..." for a run that raised), with a line per kind."""
-    taken = {}
+def _take(todo: list[str], kinds: dict, entries: dict, say) -> dict[str, str | Exception]:
+    """Each kind's fingerprint now (the exception of a run that raised), with a line per kind."""
+    taken: dict[str, str | Exception] = {}
     with tempfile.TemporaryDirectory(prefix="standing-cache-") as cache:  # C, clustered once per size
         for i, key in enumerate(todo, 1):
             start = time.perf_counter()
             try:
                 taken[key] = standing.standing_fingerprint(kinds[key], cache)
             except Exception as error:  # noqa: BLE001 - named with its kind, the others still run
-                taken[key] = f"error: {type(error).__name__}: {str(error).strip().splitlines()[0] if str(error).strip() else ''}"
+                taken[key] = error
             old = entries.get(key)
-            verdict = ("failed" if taken[key].startswith("error: ") else "new fingerprint" if old is None
+            verdict = ("FAILED" if isinstance(taken[key], Exception) else "new fingerprint" if old is None
                        else "same fingerprint" if taken[key] == old.fingerprint else "OTHER fingerprint")
             say(f"  [{i:>{len(str(len(todo)))}}/{len(todo)}] {key}: {verdict} ({time.perf_counter() - start:.1f} s)")
     return taken
@@ -113,8 +114,9 @@ def _take(todo: list[str], kinds: dict, entries: dict, now: dict, say) -> dict[s
 def _step(carried: list[str], entries: dict, now: dict, commit: str | None, dirty: bool | None,
           versions: str) -> dict:
     """The translations.json step of the carried kinds: old digest -> today's, and the evidence."""
-    before = sorted({str(entries[key].commit) for key in carried})
-    code = f"{str(commit)[:10]}{' with uncommitted changes' if dirty else ''}"
+    before = sorted({entries[key].commit or "unknown" for key in carried})
+    code = (f"commit {commit[:10]}{' with uncommitted changes' if dirty else ''}" if commit
+            else "a tree outside git")
     why = (f"The standing short runs (provenance/standing.py) of these {len(carried)} run kinds, whose executed "
            f"code changed, reproduced bit for bit the fingerprints recorded at their earlier digests (commit "
            f"{', '.join(c[:10] for c in before)}) with the code of {code}: the same curves, success rates, "
@@ -145,6 +147,11 @@ def _summarise(outcome: Outcome, accept: str | None, say) -> None:
             say(f"  {line}")
         say('if the change of behaviour is meant, run again with --accept "WHY" (their committed runs will '
             "read stale); otherwise find what the change altered")
+
+
+def _one_line(error: Exception) -> str:
+    text = str(error).strip()
+    return f"{type(error).__name__}: {text.splitlines()[0]}" if text else type(error).__name__
 
 
 def _versions() -> str:
