@@ -19,7 +19,7 @@ STAMP      := $(VENV)/.installed-py$(PYVER)-$(subst $(comma),+,$(EXTRAS))
 FULL_STAMP := $(VENV)/.installed-py$(PYVER)-deep+test
 
 .DEFAULT_GOAL := help
-.PHONY: help check-python install test test-no-torch bench
+.PHONY: help check-python install test test-no-torch bench carry-over
 
 help: ## List the targets
 	@grep -E '^[a-zA-Z0-9_-]+:.*?## ' $(MAKEFILE_LIST) | awk 'BEGIN {FS = ":.*?## "}; {printf "  %-18s %s\n", $$1, $$2}'
@@ -50,6 +50,11 @@ test-no-torch: $(STAMP) ## The suite without torch: its tests skip (PYTHON=, EXT
 
 bench: $(STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3
 	$(BIN)/python -m mediated_transfer.bench
+
+# After a change of the code runs execute (docs/reliability.md#provenance-and-stale-results).
+ACCEPT ?=
+carry-over: $(STAMP) ## Carry results over changed code: each moved run kind's short run must reproduce its fingerprint (ACCEPT="why": a meant change)
+	$(BIN)/python -m mediated_transfer.provenance.carry_over $(if $(ACCEPT),--accept "$(ACCEPT)") $(ARGS)
 
 # --- experiments: sweeps, reports, tracking (README: "Reproducing Tables II-IV") ------------
 SCALE       ?= paper

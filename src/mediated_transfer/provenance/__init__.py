@@ -11,8 +11,10 @@ plugin's identity and version too. Results of an older results format are stale.
 Results recorded before this scheme (a digest of whole files), or before a refactor that was
 shown to compute the same curves, stay current through ``translations.json``: each step maps
 the digests of one commit to those of a later one, per run kind, and says why they compute the
-same (certify.py writes a step). The digest covers this project's and its plugins' code only:
-another numpy, torch or pymunk version, or another Python, is not seen by it; the versions a run
+same. carry_over.py writes a step when each moved kind's standing short run reproduced its
+committed fingerprint (standing.py, fingerprints.json); certify.py one from a commit before
+fingerprints existed. The digest covers this project's and its plugins' code only: another
+numpy, torch or pymunk version, or another Python, is not seen by it; the versions a run
 computed with are recorded beside it (``versions``), for people comparing runs across machines.
 
 Whether a stored run is reused, recomputed, set aside or reported stale is judged in one place,
@@ -139,6 +141,16 @@ def _translations() -> list[dict]:
     if not TRANSLATIONS.is_file():
         return []
     return json.loads(TRANSLATIONS.read_text())["steps"]
+
+
+def append_translation(step: dict) -> None:
+    """Append ``step`` ({"why", "from_commit", "to_commit", "to_scheme", "map": {kind: {old:
+    new}}}) to translations.json: the one writer of that file (certify.py, carry_over.py)."""
+    from ..atomic import atomic_write_text
+
+    steps = list(_translations()) + [step]
+    atomic_write_text(TRANSLATIONS, json.dumps({"steps": steps}, indent=1, sort_keys=True) + "\n")
+    _translations.cache_clear()
 
 
 def _path(obj: Any) -> str:

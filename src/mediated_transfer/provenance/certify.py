@@ -21,7 +21,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from . import PACKAGE, SCHEME, TRANSLATIONS, _git, _translations, run_digest
+from . import PACKAGE, SCHEME, TRANSLATIONS, _git, append_translation, run_digest
 
 _DIGESTS_AT_COMMIT = r"""
 import json, sys
@@ -118,9 +118,7 @@ def certify(commit: str, why: str, plugins: list[str] = ()) -> dict:
     mapping = {_key(kind): {old: now[kind] for old in before[kind] if old != now[kind]} for kind in kinds}
     step = {"why": why, "from_commit": _git("rev-parse", commit), "to_commit": _git("rev-parse", "HEAD"),
             "to_scheme": SCHEME, "map": {k: v for k, v in mapping.items() if v}}
-    steps = list(_translations()) + [step]
-    TRANSLATIONS.write_text(json.dumps({"steps": steps}, indent=1, sort_keys=True) + "\n")
-    _translations.cache_clear()
+    append_translation(step)
     return step
 
 

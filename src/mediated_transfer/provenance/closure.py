@@ -18,6 +18,7 @@ the digest of exactly the runs that reach it.
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import importlib
 import inspect
@@ -93,13 +94,11 @@ class Closure:
             self._add_tree(obj.__qualname__, tree, obj.__globals__, pending)
 
     def _add_class(self, cls: type, pending: list) -> None:
-        tree = _tree(cls)
-        if tree is None:
+        parts = _class_parts(cls)
+        if parts is None:
             self.units[(cls.__qualname__, "class")] = cls.__qualname__
             return
-        methods = {n.name: n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
-        tree.body = [n for n in tree.body if not isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
-        tree.body = tree.body or [ast.Pass()]
+        tree, methods = parts
         self._add_tree(cls.__qualname__, tree, _globals_of(cls), pending, kind="class")
         for base in cls.__bases__:
             pending.append(base)
@@ -235,13 +234,29 @@ def _globals_of(cls: type) -> dict:
     return vars(module) if module is not None else {}
 
 
+@functools.lru_cache(maxsize=4096)
 def _tree(obj: Any) -> ast.AST | None:
+    """``obj``'s syntax tree, read and parsed once per process (every run kind's closure reaches
+    the same loop, world and learners). Shared: whoever changes it must change it the same way
+    every time (docstrings stripped, a class's methods split off by _class_parts)."""
     try:
         source = textwrap.dedent(inspect.getsource(obj))
     except (OSError, TypeError):
         return None
     module = ast.parse(source)
     return module.body[0] if module.body else None
+
+
+@functools.lru_cache(maxsize=1024)
+def _class_parts(cls: type) -> tuple[ast.AST, dict[str, ast.AST]] | None:
+    """A class's tree without its methods, and its methods by name."""
+    tree = _tree(cls)
+    if tree is None:
+        return None
+    methods = {n.name: n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))}
+    tree.body = [n for n in tree.body if not isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
+    tree.body = tree.body or [ast.Pass()]
+    return tree, methods
 
 
 _NEWER_FIELDS = frozenset({"type_params", "default_value"})
