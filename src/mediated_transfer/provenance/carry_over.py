@@ -24,12 +24,14 @@ whose fingerprint differs is refused (or, with ``--accept``, recorded) the same 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import platform
 import sys
 import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 from . import SCHEME, _dirty, _git, append_translation, library_versions
 from . import fingerprints as record
@@ -155,9 +157,23 @@ def _one_line(error: Exception) -> str:
 
 
 def _versions() -> str:
-    """Python, the libraries that compute a run, and the machine: what a fingerprint also depends on."""
+    """Python, the libraries that compute a run, and the machine (its processor too: torch picks
+    its kernels by it): what a fingerprint also depends on."""
     return ", ".join([f"{name} {version}" for name, version in library_versions().items() if version]
-                     + [platform.machine() or "unknown machine"])
+                     + [platform.machine() or "unknown machine", processor()])
+
+
+def processor() -> str:
+    """The processor's model name and widest vector instructions (Linux: /proc/cpuinfo; a virtual
+    machine's name may say little), else what ``platform`` says."""
+    with contextlib.suppress(OSError):
+        info = dict(line.split(":", 1) for line in Path("/proc/cpuinfo").read_text().splitlines()
+                    if ":" in line and line.split(":", 1)[0].strip() in ("model name", "flags"))
+        info = {key.strip(): value.strip() for key, value in info.items()}
+        flags = set(info.get("flags", "").split())
+        widest = next((name for name in ("avx512f", "avx2", "avx", "sse4_2") if name in flags), "")
+        return " ".join(part for part in (info.get("model name", ""), widest) if part) or "unknown processor"
+    return platform.processor() or "unknown processor"
 
 
 def main(argv: list[str] | None = None) -> int:
