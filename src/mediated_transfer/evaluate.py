@@ -34,7 +34,7 @@ def evaluate_saved(folder: str, episodes: int | None = None,
     """Evaluate the learner saved in ``folder``; return the result and the run's description."""
     from .env import sample_tasks
     from .env.mediated_env import MediatedInteractionEnv
-    from .run import _EVAL_NOISE_STREAM, _EVAL_TASK_STREAM, _stream_seed, evaluate
+    from .recorder import _EVAL_NOISE_STREAM, _EVAL_TASK_STREAM, _stream_seed, evaluate
 
     learner, spec = load_learner(folder)
     episodes = spec.eval_episodes if episodes is None else episodes

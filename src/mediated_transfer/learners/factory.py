@@ -162,6 +162,13 @@ def learner_target(algorithm: str, target: str | None = None):
     return plugins.locate("algorithm", target or _builtin("algorithm", algorithm))
 
 
+def own_run_loop(algorithm: str, target: str | None = None):
+    """The run loop a learner brings (its class's ``run_loop``, a dotted path: docs/extending.md,
+    "A learner with its own loop"), or None: it learns in the project's loop."""
+    path = getattr(plugins.owner_class(learner_target(algorithm, target)), "run_loop", None)
+    return None if path is None else plugins.locate("algorithm.run_loop", path)
+
+
 def representation_target(representation: str, target: str | None = None):
     """The callable that builds ``representation``'s feature map; None: the sensor vector itself."""
     path = target or _builtin("representation", representation)

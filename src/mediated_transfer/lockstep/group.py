@@ -52,6 +52,12 @@ class PerSeedLearners:
                 terminated: bool) -> None:
         self.learners[k].observe(observation, action, reward, next_observation, terminated)
 
+    def td_error(self, k: int, observation, action: int, reward: float, next_observation,
+                 terminated: bool) -> float:
+        """Run k's TD error of this transition, before it observes it (a strategy that asks for
+        TD errors; a group without this method refuses such a strategy)."""
+        return self.learners[k].td_error(observation, action, reward, next_observation, terminated)
+
     def learn(self) -> None:
         pass  # each learner updated itself in observe, as in a single run
 

@@ -38,6 +38,22 @@ from . import fingerprints as record
 from . import standing
 
 
+TAKEN_WITHOUT_CHOICES = frozenset({"aa160fd290814cbdb13f94283846f0fd15292284",
+                                    "aa5221465baa6409cc490d60711d4bc4d985dd6a"})
+"""Commits at which the fingerprints of lockstep and own-loop (SB3) kinds were taken while those
+loops recorded no episode choices (``choices`` None; the one run loop records them since). Such
+an entry is compared with ``choices`` left out (fed as None, what those runs had: the old hash
+exactly); when it reproduces, the full fingerprint is recorded, and the translation says so."""
+LEFT_OUT = ("choices",)
+
+
+def _taken_without_choices(kind, entry) -> bool:
+    from ..learners.factory import own_run_loop
+
+    return (entry is not None and entry.commit in TAKEN_WITHOUT_CHOICES
+            and (kind.lockstep or own_run_loop(kind.algorithm) is not None))
+
+
 @dataclass
 class Outcome:
     carried: list[str] = field(default_factory=list)
@@ -48,6 +64,8 @@ class Outcome:
     """Kinds whose fingerprint was recorded anew: new kinds, and accepted changes."""
     refused: dict[str, str] = field(default_factory=dict)
     """Kinds whose standing run computes something else now (or could not run): one line each."""
+    left_out: list[str] = field(default_factory=list)
+    """Carried kinds compared with ``choices`` left out (TAKEN_WITHOUT_CHOICES)."""
     step: dict | None = None
     """The translations.json step written, if any."""
 
@@ -73,13 +91,17 @@ def carry_over(accept: str | None = None, retake: bool = False, only: Sequence[s
 
     outcome, commit, dirty, versions = Outcome(), _git("rev-parse", "HEAD"), _dirty(), _versions()
     updated = dict(entries)
-    for key, found in taken.items():
+    for key, taken_key in taken.items():
         old = entries.get(key)
+        found, compared = (taken_key, taken_key) if not isinstance(taken_key, tuple) else taken_key
         if isinstance(found, Exception):
             outcome.refused[key] = f"{key}: its standing run failed ({_one_line(found)})"
-        elif old is not None and found == old.fingerprint:
+        elif old is not None and compared == old.fingerprint:
             (outcome.carried if old.digest != now[key] else outcome.reproduced).append(key)
-            updated[key] = replace(old, digest=now[key], commit=commit, dirty=dirty, versions=versions)
+            if compared != found:
+                outcome.left_out.append(key)
+            updated[key] = replace(old, digest=now[key], fingerprint=found, commit=commit, dirty=dirty,
+                                   versions=versions)
         elif old is None or accept:
             outcome.recorded.append(key)
             updated[key] = record.Entry(now[key], found, commit, dirty, versions, accept if old else None)
@@ -88,7 +110,7 @@ def carry_over(accept: str | None = None, retake: bool = False, only: Sequence[s
                                     f"{now[key]}; recorded {old.fingerprint[:12]} at digest {old.digest}, "
                                     f"commit {str(old.commit)[:10]}, {old.versions})")
     if outcome.carried:
-        outcome.step = _step(outcome.carried, entries, now, commit, dirty, versions)
+        outcome.step = _step(outcome.carried, entries, now, commit, dirty, versions, outcome.left_out)
         append_translation(outcome.step)
     if updated != entries:
         record.save(updated)
@@ -96,25 +118,32 @@ def carry_over(accept: str | None = None, retake: bool = False, only: Sequence[s
     return outcome
 
 
-def _take(todo: list[str], kinds: dict, entries: dict, say) -> dict[str, str | Exception]:
-    """Each kind's fingerprint now (the exception of a run that raised), with a line per kind."""
-    taken: dict[str, str | Exception] = {}
+def _take(todo: list[str], kinds: dict, entries: dict, say) -> dict[str, str | tuple | Exception]:
+    """Each kind's fingerprint now (the exception of a run that raised), with a line per kind; for
+    a kind taken without choices, (full fingerprint, the one with choices left out)."""
+    taken: dict[str, str | tuple | Exception] = {}
     with tempfile.TemporaryDirectory(prefix="standing-cache-") as cache:  # C, clustered once per size
         for i, key in enumerate(todo, 1):
             start = time.perf_counter()
+            old = entries.get(key)
             try:
-                taken[key] = standing.standing_fingerprint(kinds[key], cache)
+                if _taken_without_choices(kinds[key], old):
+                    found = standing.standing_fingerprints(kinds[key], cache, (LEFT_OUT,))
+                    taken[key] = (found[()], found[LEFT_OUT])
+                else:
+                    taken[key] = standing.standing_fingerprint(kinds[key], cache)
             except Exception as error:  # noqa: BLE001 - named with its kind, the others still run
                 taken[key] = error
-            old = entries.get(key)
+            compared = taken[key][1] if isinstance(taken[key], tuple) else taken[key]
             verdict = ("FAILED" if isinstance(taken[key], Exception) else "new fingerprint" if old is None
-                       else "same fingerprint" if taken[key] == old.fingerprint else "OTHER fingerprint")
+                       else "OTHER fingerprint" if compared != old.fingerprint
+                       else "same fingerprint" + (" (choices left out)" if isinstance(taken[key], tuple) else ""))
             say(f"  [{i:>{len(str(len(todo)))}}/{len(todo)}] {key}: {verdict} ({time.perf_counter() - start:.1f} s)")
     return taken
 
 
 def _step(carried: list[str], entries: dict, now: dict, commit: str | None, dirty: bool | None,
-          versions: str) -> dict:
+          versions: str, left_out: Sequence[str] = ()) -> dict:
     """The translations.json step of the carried kinds: old digest -> today's, and the evidence."""
     before = sorted({entries[key].commit or "unknown" for key in carried})
     code = (f"commit {commit[:10]}{' with uncommitted changes' if dirty else ''}" if commit
@@ -123,6 +152,12 @@ def _step(carried: list[str], entries: dict, now: dict, commit: str | None, dirt
            f"code changed, reproduced bit for bit the fingerprints recorded at their earlier digests (commit "
            f"{', '.join(c[:10] for c in before)}) with the code of {code}: the same curves, success rates, "
            f"results, episode choices and trained learner states. Computed by carry_over on {versions}.")
+    if left_out:
+        why += (f" Of these, {len(left_out)} ({', '.join(sorted(left_out))}) were compared with their episode "
+                "choices left out (fed as None, what their loops recorded when the fingerprint was taken): "
+                "their loops (lockstep, own loop) record choices now, computed beside the same run; every "
+                "other field and the learner state reproduced bit for bit, and their full fingerprints are "
+                "recorded now.")
     return {"why": why, "from_commit": before[0] if len(before) == 1 else before, "to_commit": commit,
             "to_scheme": SCHEME, "map": {key: {entries[key].digest: now[key]} for key in sorted(carried)}}
 

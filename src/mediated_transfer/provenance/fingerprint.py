@@ -22,11 +22,17 @@ COMPUTED = ("steps", "mean_reward", "success_rate", "reward_loss", "time_to_thre
 """The fields of a RunResult that a run computes (its wall time, speed, config and code are not)."""
 
 
-def fingerprint(runs: Iterable[tuple[Any, Mapping[str, Any]]]) -> str:
-    """64 hex digits over ``runs``: (RunResult, its learner's ``state_dict()``) pairs, in order."""
+def fingerprint(runs: Iterable[tuple[Any, Mapping[str, Any]]], leave_out: Iterable[str] = ()) -> str:
+    """64 hex digits over ``runs``: (RunResult, its learner's ``state_dict()``) pairs, in order.
+    ``leave_out``: fields of COMPUTED fed as None, as a run that did not record them had them
+    (a fingerprint taken then is reproduced exactly; carry_over.py, ``choices``)."""
+    leave_out = frozenset(leave_out)
+    unknown = leave_out - set(COMPUTED)
+    if unknown:
+        raise ValueError(f"cannot leave out {sorted(unknown)}: not computed fields ({', '.join(COMPUTED)})")
     digest = hashlib.sha256()
     for result, state in runs:
-        _feed(digest, {key: getattr(result, key) for key in COMPUTED})
+        _feed(digest, {key: None if key in leave_out else getattr(result, key) for key in COMPUTED})
         _feed(digest, state)
     return digest.hexdigest()
 

@@ -136,29 +136,38 @@ def kinds() -> dict[str, Kind]:
 def standing_fingerprint(kind: Kind, cache_dir: str | None = None) -> str:
     """Run ``kind``'s standing run and return its fingerprint (source tasks are clustered into
     ``cache_dir``, a temporary folder if None)."""
+    return standing_fingerprints(kind, cache_dir)[()]
+
+
+def standing_fingerprints(kind: Kind, cache_dir: str | None = None,
+                          leave_outs: tuple[tuple[str, ...], ...] = ()) -> dict[tuple[str, ...], str]:
+    """Run ``kind``'s standing run once; its fingerprint in full (key ``()``) and with each of
+    ``leave_outs``' fields left out (fingerprint.py)."""
+    from .fingerprint import fingerprint
+
     with tempfile.TemporaryDirectory(prefix="standing-") as tmp:
         cache = cache_dir or tmp
         if kind.lockstep:
-            return _lockstep_fingerprint([kind.spec(seed, cache) for seed in LOCKSTEP_SEEDS])
-        return _single_fingerprint(kind.spec(SEED, cache))
+            runs = _lockstep_runs([kind.spec(seed, cache) for seed in LOCKSTEP_SEEDS])
+        else:
+            runs = _single_runs(kind.spec(SEED, cache))
+    return {leave_out: fingerprint(runs, leave_out) for leave_out in ((), *leave_outs)}
 
 
-def _single_fingerprint(spec) -> str:
+def _single_runs(spec) -> list:
     from ..run import execute_run
-    from .fingerprint import fingerprint
 
     states: list[dict] = []
     result = execute_run(spec, on_finish=_keep_state(states))
-    return fingerprint([(result, states[0])])
+    return [(result, states[0])]
 
 
-def _lockstep_fingerprint(specs) -> str:
+def _lockstep_runs(specs) -> list:
     from ..lockstep.run import RunHooks, execute_lockstep
-    from .fingerprint import fingerprint
 
     states: list[list[dict]] = [[] for _ in specs]
     results = execute_lockstep(specs, [RunHooks(on_finish=_keep_state(s)) for s in states])
-    return fingerprint([(result, s[0]) for result, s in zip(results, states)])
+    return [(result, s[0]) for result, s in zip(results, states)]
 
 
 def _keep_state(states: list) -> Callable:

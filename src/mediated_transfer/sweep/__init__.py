@@ -174,7 +174,7 @@ def _try_plugins(spec: "RunSpec") -> None:
     package), so that a value they refuse stops the command now, in one line naming it."""
     from .. import plugins
     from ..learners.factory import learner_target, make_learner
-    from ..run import RunStreams
+    from ..recorder import RunStreams
 
     foreign = {"strategy": spec.strategy_class(), "algorithm": learner_target(spec.algorithm, spec.algorithm_target)}
     foreign = {k: t for k, t in foreign.items() if not plugins.path_of(t).startswith("mediated_transfer.")}

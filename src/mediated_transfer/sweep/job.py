@@ -24,6 +24,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from ..config.compose import ConfigError, first_line
 from ..config.spec import comparable, differences, run_spec
+from ..provenance import code_version
 from ..provenance.judge import RECOMPUTE, SET_ASIDE, judge
 from ..results import RunResult
 from ..stored.aside import set_aside
@@ -241,7 +242,6 @@ class _Computing:
     def __init__(self, cfg: DictConfig, spec, folder: Path, resolved: dict, sweep_dir, variant: str,
                  lockstep: dict | None = None):
         from ..lockstep.run import RunHooks
-        from ..provenance import code_version
         from ..saved_learner import forget_learner, save_learner
 
         self.folder, self.resolved, self.lockstep = folder, resolved, lockstep
@@ -276,10 +276,10 @@ class _Computing:
     def finished(self, result: RunResult) -> None:
         """Write the result (atomically) and end the MLflow run as finished."""
         result.config = self.resolved
-        if self.lockstep is not None:  # the lockstep loop's code, and how the group ran
-            from ..provenance import code_version
-
-            result.code = {**code_version(self.spec, lockstep=True), **self.lockstep}
+        # The one writer of a run's code version: only the job knows how it was computed
+        # (alone, or in a lockstep group, and how the group ran).
+        lockstep = self.lockstep is not None
+        result.code = {**code_version(self.spec, lockstep=lockstep), **(self.lockstep or {})}
         result.write(self.folder)
         self.result = result
         if self.live is not None:
