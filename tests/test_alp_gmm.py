@@ -160,5 +160,7 @@ def test_a_run_through_the_strategy_door_fits_and_hears_every_episode():
                    strategy_params={"fit_every": 20, "random_share": 0.2, "k_max": 3},
                    budget=3000, eval_points=2, eval_episodes=2)
     result = execute_run(spec.validate())
-    assert result.strategy == "alp_gmm" and result.code["plugins"][0]["target"] == spec.strategy_target
+    from mediated_transfer.provenance import code_version
+
+    assert result.strategy == "alp_gmm" and code_version(spec)["plugins"][0]["target"] == spec.strategy_target
     assert sum(result.choices["episodes"]) > 20  # past the bootstrap: at least one fit

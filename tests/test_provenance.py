@@ -148,10 +148,11 @@ def test_a_change_to_one_learner_makes_only_its_runs_stale(tmp_path, current):
     edits = {"src/mediated_transfer/learners/dqn_kernels.py": ("self.adam_steps += 1", "self.adam_steps += 2")}
     changed = {k for k, v in _digests_of_edited_copy(tmp_path / "dqn", edits).items() if v != current[k]}
     assert changed == {"dqn/network/regular", "dqn/network/regular/lockstep"}
-    # The lockstep loop's code counts for lockstep runs only.
-    edits = {"src/mediated_transfer/lockstep/run.py": ("run.step += 1", "run.step += 1 + 0")}
+    # The one loop (a single run is a lockstep group of one) counts for single and lockstep runs alike.
+    edits = {"src/mediated_transfer/lockstep/run.py": ("record.step(reward, td)", "record.step(reward + 0, td)")}
     changed = {k for k, v in _digests_of_edited_copy(tmp_path / "lock", edits).items() if v != current[k]}
-    assert changed == {"dqn/network/regular/lockstep"}
+    assert {"dqn/network/regular", "dqn/network/regular/lockstep", "linear_q/fsr/none"} <= changed
+    assert not any(k.startswith("sb3_") for k in changed)  # SB3's own loop does not run it
 
 
 def test_results_are_current_through_the_translation_steps_and_stale_otherwise():

@@ -9,7 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mediated_transfer import run as run_module
+from mediated_transfer import recorder as recorder_module
+from mediated_transfer.lockstep import run as lockstep_module
 from mediated_transfer.config.spec import spec_from_dict
 from mediated_transfer.env import WorldConfig, sample_tasks
 from mediated_transfer.env.mediated_env import MediatedInteractionEnv
@@ -31,7 +32,7 @@ def test_a_tiny_run_of_each_learner_writes_a_complete_result(tmp_path, algorithm
     back = RunResult.read(tmp_path / "run")
     assert back == result
     assert back.steps == [200, 400, 600]
-    assert back.code["versions"]["numpy"] == np.__version__  # what the digest does not follow
+    assert back.code == {}  # the job writes the code version (sweep/job.py), knowing how the run ran
     assert len(back.mean_reward) == len(back.success_rate) == 3
     assert all(0.0 <= r <= 10.0 for r in back.mean_reward)
     assert back.reward_loss == pytest.approx(sum(10.0 - r for r in back.mean_reward))
@@ -89,7 +90,7 @@ def test_every_strategy_of_a_seed_is_evaluated_on_the_same_target_tasks(monkeypa
         seen.setdefault(current, []).append(([t.coordinates.tolist() for t in tasks], seed))
         return 0.0, 0.0
 
-    monkeypatch.setattr(run_module, "evaluate", recording_evaluate)
+    monkeypatch.setattr(recorder_module, "evaluate", recording_evaluate)
     for current, (strategy, n) in {"none": ("none", 0), "scaffolded": ("scaffolded", 3)}.items():
         execute_run(RunSpec(strategy=strategy, n_source=n, seed=5, representation="fsr", **TINY))
     assert seen["none"] == seen["scaffolded"]
@@ -135,8 +136,9 @@ def test_bad_input_fails_before_any_work(monkeypatch, changes, message):
     def no_work(*args, **kwargs):
         raise AssertionError("work started before the input was checked")
 
-    monkeypatch.setattr(run_module, "source_task_set", no_work)
-    monkeypatch.setattr(run_module, "MediatedInteractionEnv", no_work)
+    monkeypatch.setattr(recorder_module, "source_task_set", no_work)
+    monkeypatch.setattr(recorder_module, "MediatedInteractionEnv", no_work)
+    monkeypatch.setattr(lockstep_module, "MediatedInteractionEnv", no_work)
     spec = replace(RunSpec(**TINY), **changes)
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
         execute_run(spec)

@@ -241,7 +241,7 @@ def test_a_curriculum_chooses_tasks_of_the_task_space_and_hears_every_episode_wi
     assert all(o.td_error is not None and o.td_error >= 0 for o in heard)
     sources = [o for o in heard if o.task is not None]
     assert sources and all(abs(o.task.target_distance - 3.0) < 1e-9 for o in sources[:1])
-    assert result.code["digest"] and result.strategy == "outward"
+    assert result.strategy == "outward" and sum(result.choices["episodes"]) == len(heard)
 
 
 def test_the_task_space_spans_source_to_target_distances():

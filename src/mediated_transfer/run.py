@@ -24,13 +24,13 @@ from .env import WorldConfig
 from .env.task import check_room
 from .learners.factory import check_learner, learner_target
 from .learners.factory import own_run_loop as learner_run_loop
-from .lockstep.run import RunHooks, execute_lockstep
-from .recorder import EvaluationFn, FinishFn, ProgressFn
+from .lockstep.run import RunHooks, cpu_group, step_group
+from .recorder import EvaluationFn, FinishFn, ProgressFn, RunStreams
 from .results import RunResult
 from .transfer.strategy import METHODS, SOURCE_TASKS
 
 # Re-exported: what evaluate.py and tests read from here (recorder.py holds them).
-from .recorder import _EVAL_NOISE_STREAM, _EVAL_TASK_STREAM, RunStreams, _stream_seed, evaluate  # noqa: E402,F401
+from .recorder import _EVAL_NOISE_STREAM, _EVAL_TASK_STREAM, _stream_seed, evaluate  # noqa: E402,F401
 
 MAX_STEPS = 10**9
 """Most learning steps, and most evaluation steps, of one run: the paper's runs take 500k and
@@ -202,8 +202,9 @@ def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_ever
     if own_loop is not None:  # e.g. SB3 learns in its own loop (run_sb3.py)
         return own_loop(spec, progress, progress_every, on_evaluation, on_finish)
     # A group of one: the same calls in the same order as every run of a CPU group.
+    streams = [RunStreams.of(spec)]
     hooks = RunHooks(progress, progress_every, on_evaluation, on_finish)
-    return execute_lockstep([spec], [hooks], validate=False)[0]
+    return step_group([spec], streams, cpu_group([spec], streams), [hooks])[0]
 
 
 def own_run_loop(spec: RunSpec):

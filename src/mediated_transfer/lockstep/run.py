@@ -65,18 +65,24 @@ def check_group(specs: Sequence["RunSpec"]) -> None:
                          "lockstep.runs must be 1 for it")
 
 
+def cpu_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams]) -> PerSeedLearners:
+    """Each run's own learner, as a single run has it."""
+    spec = specs[0]
+    return PerSeedLearners([
+        make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
+                     spec.representation_params, world=spec.world, seed=s.learner_seed,
+                     algorithm_target=spec.algorithm_target,
+                     representation_target_path=spec.representation_target)
+        for s in streams])
+
+
 def make_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams], device: str) -> LearnerGroup:
     """The learners of the group: per seed on the CPU, stacked networks on a GPU."""
     if device not in DEVICES:
         raise ValueError(f"lockstep.device={device!r} is unknown; allowed: {', '.join(DEVICES)}")
     spec = specs[0]
     if device == "cpu":
-        return PerSeedLearners([
-            make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                         spec.representation_params, world=spec.world, seed=s.learner_seed,
-                         algorithm_target=spec.algorithm_target,
-                         representation_target_path=spec.representation_target)
-            for s in streams])
+        return cpu_group(specs, streams)
     if spec.algorithm != "dqn":
         raise ValueError(f"lockstep.device={device} stacks deep Q-networks; algorithm={spec.algorithm} "
                          "runs on the CPU (lockstep.device=cpu)")
@@ -96,20 +102,25 @@ def make_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams], device
 
 def execute_lockstep(specs: Sequence["RunSpec"], hooks: Sequence[RunHooks] | None = None,
                      on_result: ResultFn | None = None, device: str = "cpu",
-                     group: LearnerGroup | None = None, validate: bool = True) -> list[RunResult]:
+                     group: LearnerGroup | None = None) -> list[RunResult]:
     """Run the learning runs ``specs`` together; returns their results in order. ``on_result``
-    receives each result as soon as its run ends (a diverged run ends early). ``validate``:
-    False where the caller has validated ``specs`` (execute_run)."""
-    if validate:
-        for spec in specs:
-            spec.validate()
+    receives each result as soon as its run ends (a diverged run ends early)."""
+    for spec in specs:
+        spec.validate()
     check_group(specs)
+    streams = [RunStreams.of(spec) for spec in specs]
+    return step_group(specs, streams, group if group is not None else make_group(specs, streams, device),
+                      hooks, on_result, device)
+
+
+def step_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams], group: LearnerGroup,
+               hooks: Sequence[RunHooks] | None = None, on_result: ResultFn | None = None,
+               device: str = "cpu") -> list[RunResult]:
+    """The loop of execute_lockstep over a made ``group`` (execute_run: a CPU group of one, so
+    that a single run's code digest does not take in the stacked networks it never uses)."""
     hooks = list(hooks) if hooks is not None else [RunHooks() for _ in specs]
     if len(hooks) != len(specs):
         raise ValueError(f"{len(specs)} runs but {len(hooks)} sets of callbacks")
-    streams = [RunStreams.of(spec) for spec in specs]
-    if group is None:
-        group = make_group(specs, streams, device)
     records = [RunRecorder(spec, stream, hook.progress, hook.progress_every, hook.on_evaluation)
                for spec, stream, hook in zip(specs, streams, hooks)]
     td_error = getattr(group, "td_error", None)
