@@ -137,12 +137,10 @@ def _free(folder: Path) -> bool:
 
 
 def _end(settings: tracking.TrackingSettings, run, folder: Path) -> None:
-    from .job import run_artifacts
-
     live = tracking.LiveRun.resume(settings, run.info.run_id)
     result = _written(folder, since_ms=run.info.start_time)
     if result is not None:  # computed, stopped while being logged: logged in full, as its worker would have
-        live.finish(result, run_artifacts(folder))
+        live.finish(result, tracking.run_artifacts(folder))
     else:
         live.end("KILLED")
 

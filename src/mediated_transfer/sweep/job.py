@@ -181,7 +181,7 @@ def _reusable(job: _JobRef) -> tuple[RunResult, str, str | None] | None:
         with tracking.store_write():
             tracking.log_run(_settings(cfg), experiment=str(cfg.name), key=tags["run_key"],
                              run_name=run_name(cfg, job.variant), result=found,
-                             params=tracking.flatten(job.resolved), tags=tags, artifacts=run_artifacts(folder))
+                             params=tracking.flatten(job.resolved), tags=tags, artifacts=tracking.run_artifacts(folder))
     return found, "exists", stale
 
 
@@ -283,7 +283,7 @@ class _Computing:
         result.write(self.folder)
         self.result = result
         if self.live is not None:
-            self.live.finish(result, run_artifacts(self.folder))
+            self.live.finish(result, tracking.run_artifacts(self.folder))
 
     def stopped(self, error: BaseException) -> None:
         if self.live is None:
@@ -291,20 +291,13 @@ class _Computing:
         if self.result is not None:
             # Stopped while its written result was being logged: logged in full, FINISHED (once
             # finished, the live run ignores this).
-            self.live.finish(self.result, run_artifacts(self.folder))
+            self.live.finish(self.result, tracking.run_artifacts(self.folder))
         else:
             self.live.end(tracking.stopped_status(error))
 
 
 def _settings(cfg: DictConfig) -> tracking.TrackingSettings:
     return tracking.TrackingSettings.from_config(cfg.tracking)
-
-
-def run_artifacts(folder: Path) -> list[Path]:
-    """A run's files logged with its MLflow run."""
-    files = [folder / "result.json", folder / "curve.csv"]
-    files += sorted((folder / ".hydra").glob("*.yaml"))
-    return [f for f in files if f.is_file()]
 
 
 def _limit_threads(threads: int) -> None:

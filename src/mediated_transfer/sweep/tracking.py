@@ -200,6 +200,12 @@ def _store_lock(settings: TrackingSettings):
         os.close(fd)  # releases the lock
 
 
+def run_artifacts(folder: Path) -> list[Path]:
+    """A run's files logged with its MLflow run."""
+    files = [folder / "result.json", folder / "curve.csv"]
+    files += sorted((folder / ".hydra").glob("*.yaml"))
+    return [f for f in files if f.is_file()]
+
 @contextlib.contextmanager
 def store_write():
     """The ``with`` block writes to the store whole: Ctrl-C or SIGTERM arriving meanwhile takes
