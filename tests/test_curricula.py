@@ -426,7 +426,10 @@ def test_sb3_ppo_learns_through_the_wrapper_on_a_curriculum(cell, tmp_path):
                    budget=600, eval_points=3, eval_episodes=3, source_pool_size=200, cache_dir=str(tmp_path))
     result = execute_run(spec)
     assert result.learner_stats["learning_steps"] == 600 and len(result.mean_reward) == 3
-    assert result.code["plugins"][0]["target"] == spec.strategy_target
+    # The job records the code version (sweep/job.py); the plugin is in it.
+    from mediated_transfer.provenance import code_version
+
+    assert code_version(spec)["plugins"][0]["target"] == spec.strategy_target
 
 
 def test_a_td_error_curriculum_is_refused_for_a_learner_that_cannot_report_td_errors():
