@@ -13,13 +13,14 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from ..atomic import atomic_write_text
+from ..studies import Study, Written, command
+from ..studies import build as build_study
 from .trials import TRIALS_FILE
 from .space import SearchSpace, SearchSpaceError, available_learners, find_search_space, override_value
 from .study import DEFAULTS, study_folder
@@ -198,13 +199,22 @@ def _native(value):
     return value.item() if isinstance(value, np.generic) else value
 
 
-def build(root: Path, scale: str | None = None) -> Path:
-    """Write <reports dir>/table1.md and its figures from <root>/tuning/*/trials.csv."""
+class Tuned(NamedTuple):
+    """One learner's stored study: its search space, its trials (None: not tuned yet), its budget."""
+
+    space: SearchSpace
+    trials: pd.DataFrame | None
+    budget: int
+    folder: Path
+    """tuning/<learner>/: trials.csv and the refinement's table."""
+
+
+def load(root: Path, scale: str | None = None) -> tuple[list[Tuned], Path]:
+    """Every search space's committed trials (<root>/tuning/*/trials.csv), and the reports folder."""
     from ..config.compose import compose_config
 
     root = Path(root)
-    sections = []
-    out_dir = None
+    tuned, out_dir = [], None
     scales = {}  # composing takes a moment: once per scale
     for learner in available_learners():
         space = find_search_space(learner).with_scale(scale)
@@ -213,22 +223,42 @@ def build(root: Path, scale: str | None = None) -> Path:
         scale_cfg = scales[space.scale]
         out_dir = Path(scale_cfg.paths.reports_dir)
         csv = study_folder(root, space) / TRIALS_FILE
-        trials = load_trials(csv) if csv.is_file() else None
-        sections.append(learner_section(space, trials, int(scale_cfg.scale.budget)))
-        sections.append(_refinement_section(space, csv.parent))
-        if trials is not None and not trials.empty:
-            figure(space, trials, out_dir / f"table1_{space.learner}.png")
+        tuned.append(Tuned(space, load_trials(csv) if csv.is_file() else None, int(scale_cfg.scale.budget),
+                           csv.parent))
+    return tuned, out_dir
+
+
+def sections(tuned: list[Tuned]) -> list[str]:
+    """Per learner, what its trials measured (best, defaults, median, the split) and its refinement."""
+    return [text for t in tuned
+            for text in (learner_section(t.space, t.trials, t.budget), _refinement_section(t.space, t.folder))]
+
+
+def report(tuned: list[Tuned], out_dir: Path, texts: list[str]) -> Written:
+    """table1.md's text, and each tuned learner's figure (drawn here)."""
+    figures = [figure(t.space, t.trials, out_dir / f"table1_{t.space.learner}.png")
+               for t in tuned if t.trials is not None and not t.trials.empty]
     text = "\n".join([
         "# Table I: hyperparameters, tuned by random search (issue 9)", "",
         "Built by `make table1` from the committed `tuning/<learner>/trials.csv`; the studies "
         "themselves are `tuning/<learner>/study.db` (resume with `make tune LEARNER=...`). As in the "
         "paper, each learner is tuned for the runs WITHOUT transfer only, on tuning seeds that are "
         "not the table seeds; a stronger baseline can shrink the measured gain from transfer.", "",
-        *sections,
+        *texts,
     ])
-    out_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out_dir / TABLE_FILE, text)
-    return out_dir / TABLE_FILE
+    return Written({out_dir / TABLE_FILE: text}, figures)
+
+
+def study(root: Path, scale: str | None = None) -> Study:
+    """Table I as a registration -> runs -> measures -> report (studies/shape.py): its
+    registration is the search spaces, fixed before their trials."""
+    return Study("table1", "conf/hparams_search/", lambda: load(root, scale),
+                 lambda loaded: (*loaded, sections(loaded[0])), lambda measured: report(*measured))
+
+
+def build(root: Path, scale: str | None = None) -> list[Path]:
+    """Write <reports dir>/table1.md and its figures from <root>/tuning/*/trials.csv."""
+    return build_study(study(root, scale))
 
 
 def tuned_values(space: SearchSpace) -> dict:
@@ -257,19 +287,16 @@ def _refinement_section(space: SearchSpace, folder: Path) -> str:
     return section(refinement, pd.read_csv(folder / REFINE_FILE))
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def _study(argv: list[str]) -> Study:
     parser = argparse.ArgumentParser(prog="python -m mediated_transfer.tuning.table1", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--root", type=Path, default=Path("."), help="project root: tuning/, reports/")
     parser.add_argument("--scale", default=None, help="the studies' scale (default: each search space's)")
     args = parser.parse_args(argv)
-    try:
-        print(build(args.root, args.scale))
-    except SearchSpaceError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    return 0
+    return study(args.root, args.scale)
 
+
+main = command(_study)
 
 if __name__ == "__main__":
     sys.exit(main())
