@@ -61,7 +61,17 @@ class Study(Generic[Runs, Measures]):
 def stale_runs(results: Iterable[RunResult]) -> list[str]:
     """One line per run computed by other code than the current (the one judge,
     provenance/judge.py)."""
-    return [f"{r.strategy}_{r.n_source} seed={r.seed}: {why}" for r in results if (why := stale(r)) is not None]
+    lines = []
+    for r in results:
+        try:
+            why = stale(r)
+        except (KeyError, TypeError, ValueError) as error:
+            # A record the judge cannot read (hand-made, or an old format) is named, not fatal: the
+            # report is still built, as the tables' is from stale runs.
+            why = f"its record cannot be judged ({type(error).__name__}: {error})"
+        if why is not None:
+            lines.append(f"{r.strategy}_{r.n_source} seed={r.seed}: {why}")
+    return lines
 
 
 def build(study: Study, say: Callable[[str], None] = print) -> list[Path]:
