@@ -13,10 +13,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..reporting.compose import USER_ERRORS, one_line
-from .report import collect, dqn_cells, write_report
-from .study import DQN_EXPERIMENT, NONE, SCAFFOLDED, Study, load_first_study, load_study
-from .superseded import superseded_section
+from ..studies import Study as StudyShape
+from ..studies import command, split_options
+from .report import dqn_cells, measure, report
+from .study import DQN_EXPERIMENT, NONE, SCAFFOLDED, Study, StudyRuns, collect, load_first_study, load_study
 
 
 def dqn_study(study: Study, overrides: list[str]) -> Study:
@@ -31,29 +31,22 @@ def dqn_study(study: Study, overrides: list[str]) -> Study:
     return Study(dqn.experiment, dqn.groups, cells, dqn.seeds)
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else list(argv)
-    if any(a in ("-h", "--help") for a in args):
-        print(__doc__)
-        return 0
-    try:
-        unknown = [a for a in args if a.startswith("--") and a != "--dqn-cells"]
-        if unknown:
-            raise ValueError(f"unknown option {unknown[0]}; this command takes --dqn-cells and Hydra overrides")
-        overrides = [a for a in args if a != "--dqn-cells"]
-        study = load_study(overrides)
-        if "--dqn-cells" in args:
-            print(",".join(dqn_cells(study)))
-            return 0
-        first = load_first_study(overrides)
-        superseded = superseded_section(first, collect(first)[0], float(first.config.threshold))
-        paths = write_report(study, Path(study.config.paths.reports_dir), superseded, dqn_study(study, overrides),
-                             progress=lambda line: print(line, file=sys.stderr))
-    except USER_ERRORS as error:
-        raise SystemExit(f"error: {one_line(error)}") from None
-    print("curricula: " + ", ".join(map(str, paths)))
-    return 0
+def curricula(args: list[str]) -> StudyShape | None:
+    """The study as a registration -> runs -> measures -> report (studies/shape.py); None after
+    --dqn-cells, which only prints the rule's pick."""
+    options, overrides = split_options(args, ("--dqn-cells",))
+    study = load_study(overrides)
+    if "--dqn-cells" in options:
+        print(",".join(dqn_cells(study)))
+        return None
+    first, dqn = load_first_study(overrides), dqn_study(study, overrides)
+    return StudyShape(
+        "curricula", str(study.registration), lambda: StudyRuns(collect(study), collect(dqn), collect(first)),
+        lambda runs: measure(study, runs, dqn, first, progress=lambda line: print(line, file=sys.stderr)),
+        lambda measured: report(study, measured, Path(study.config.paths.reports_dir)), StudyRuns.results)
 
+
+main = command(curricula, __doc__)
 
 if __name__ == "__main__":
     sys.exit(main())

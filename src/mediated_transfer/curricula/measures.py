@@ -109,6 +109,12 @@ def first_annulus_success(run: RunResult) -> int | None:
     return None
 
 
+RULE = ("The registered rule: an arm *beats* scaffolded transfer (N_source = 100) for a learner in a world when "
+        "the 95 % bootstrap interval of its mean L_R over scaffolded's lies entirely below 1, is *worse* when it "
+        "lies entirely above 1, and is *undecided* otherwise; the same words against regular transfer.")
+"""The rule as the report states it (conf/experiment/curricula2.yaml's words); ``word`` applies it."""
+
+
 def word(interval: tuple[float, float, float]) -> str:
     """The registered rule on a ratio of mean L_R (lower is better): BEATS when the whole 95 %
     interval lies below 1, WORSE when it lies above 1, otherwise UNDECIDED (an undefined

@@ -6,38 +6,24 @@ reading the results and is kept when the report is rebuilt."""
 from __future__ import annotations
 
 import re
-import subprocess
 from pathlib import Path
+from typing import NamedTuple
 
 import pandas as pd
 
-from ..atomic import atomic_write_text
-from ..config.compose import CONF_DIR
 from ..env.task_space import TaskSpace
-from ..reporting.collect import collect_sweep
 from ..reporting.formats import write_csv
 from ..reporting.intervals import format_interval
+from ..studies import Written, added_in
 from .figures import label, plot_choices, plot_curves
-from .measures import (ArmMeasures, arm_measures, compare, dqn_picks, exposure_correlation, steps_text, time_ratio, verdict)
-from .study import DEFAULT_WORLD, NONE, REGULAR, SCAFFOLDED, Study
+from .measures import (RULE, ArmMeasures, arm_measures, compare, dqn_picks, exposure_correlation, steps_text,
+                       time_ratio, verdict)
+from .study import DEFAULT_WORLD, NONE, REGULAR, SCAFFOLDED, Study, StudyRuns, collect
+from .superseded import superseded_section
 
 REPORT = "CURRICULA.md"
 READING_START = "<!-- reading: written by hand, kept when the report is rebuilt -->"
 READING_END = "<!-- /reading -->"
-
-
-def collect(study: Study) -> tuple[dict[str, dict[str, list]], dict[str, dict[str, int]]]:
-    """group -> arm -> its finished runs (registered seeds only), and the failed ones' counts."""
-    runs, failed = {}, {}
-    for group in study.groups:
-        cfg = group.config
-        cells = collect_sweep(group.sweep_dir, str(cfg.algorithm.name), group.representation,
-                              int(cfg.scale.budget), int(cfg.scale.eval_points), group.variant,
-                              int(cfg.scale.eval_episodes))
-        runs[group.name] = {c: [r for r in cells[c].results if r.seed in study.seeds] if c in cells else []
-                            for c in study.cells}
-        failed[group.name] = {c: len(cells[c].failed) if c in cells else 0 for c in study.cells}
-    return runs, failed
 
 
 def group_measures(study: Study, arms: dict[str, list], failed: dict[str, int],
@@ -92,53 +78,60 @@ def decision_table(study: Study, arms: dict[str, list], cells: tuple[str, ...], 
     return pd.DataFrame(rows).fillna(""), words, ratios
 
 
-def registration(experiment: str) -> str:
-    """The commit that added the study's experiment file (its pre-registration), if git knows it."""
-    path = CONF_DIR / "experiment" / f"{experiment}.yaml"
-    try:
-        out = subprocess.run(["git", "log", "--diff-filter=A", "--format=%h (%cs)", "--", str(path)],
-                             cwd=CONF_DIR, capture_output=True, text=True, timeout=30).stdout.split()
-    except (OSError, subprocess.SubprocessError):
-        return "its first commit"
-    return " ".join(out[-2:]) if out else "its first commit"
+class Measured(NamedTuple):
+    """The study's measures: per group its arms' measures and decision tables, the DQN's section
+    and the first study's superseded section (markdown: both are measured and worded together)."""
+
+    parts: dict[str, dict]
+    runs: dict[str, dict[str, list]]
+    dqn_section: str
+    superseded: str
 
 
-def write_report(study: Study, reports_dir: Path, superseded: str = "", dqn: Study | None = None,
-                 progress=print) -> list[Path]:
-    """The report of ``study`` (the linear groups), its DQN arms' section from ``dqn`` where
-    they have runs, and the first study's ``superseded`` section."""
+def measure(study: Study, runs: StudyRuns, dqn: Study, first: Study, progress=print) -> Measured:
+    """The linear groups' measures and words by the registered rules (measures.py), the DQN's arms'
+    where they have runs, and the first study's superseded section."""
     cfg = study.config
     threshold, budget = float(cfg.threshold), int(cfg.scale.budget)
-    runs, failed = collect(study)
-    dqn_section = _dqn_section(dqn, threshold, budget) if dqn is not None else ""
-    out_dir = reports_dir / "curricula"
-    out_dir.mkdir(parents=True, exist_ok=True)
+    (linear, failed), dqn_runs = runs.linear, runs.dqn
+    superseded = superseded_section(first, runs.first[0], float(first.config.threshold))
+    dqn_section = _dqn_section(dqn, dqn_runs, threshold, budget)
     parts: dict[str, dict] = {}
-    for group, arms in runs.items():
+    for group, arms in linear.items():
         progress(f"curricula: measuring {group} ({sum(len(v) for v in arms.values())} runs)")
         q1, w1, r1 = decision_table(study, arms, study.curricula, threshold, budget)
         q2, w2, _ = decision_table(study, arms, study.handovers, threshold, budget)
         measures = group_measures(study, arms, failed[group], threshold)
         parts[group] = {"arms": measures, "measures": measures_table(study, measures), "q1": q1, "q2": q2,
                         "w1": w1, "w2": w2, "r1": r1}
+    return Measured(parts, linear, dqn_section, superseded)
+
+
+def report(study: Study, measured: Measured, reports_dir: Path) -> Written:
+    """CURRICULA.md's text, and its tables and figures (written here)."""
+    cfg = study.config
+    parts, runs = measured.parts, measured.runs
+    out_dir = reports_dir / "curricula"
+    out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for group, part in parts.items():
         stem = group.lower().replace(", ", "_")
         paths += [write_csv(part[k], out_dir / f"curricula_{stem}{suffix}.csv")
                   for k, suffix in (("measures", ""), ("q1", "_q1"), ("q2", "_q2")) if not part[k].empty]
     space = TaskSpace()
-    paths.append(plot_curves(runs, threshold, float(cfg.env.success_reward), out_dir / "curricula_curves.png"))
+    paths.append(plot_curves(runs, float(cfg.threshold), float(cfg.env.success_reward),
+                             out_dir / "curricula_curves.png"))
     paths.append(plot_choices(runs, space.reach, space.target_distances, out_dir / "curricula_choices.png"))
-    report = reports_dir / REPORT
-    atomic_write_text(report, render(study, parts, runs, _kept_reading(report), "\n\n".join(
-        part for part in (dqn_section, superseded) if part)))
-    return [report, *paths]
+    path = reports_dir / REPORT
+    text = render(study, parts, runs, _kept_reading(path), "\n\n".join(
+        part for part in (measured.dqn_section, measured.superseded) if part))
+    return Written({path: text}, paths)
 
 
-def _dqn_section(dqn: Study, threshold: float, budget: int) -> str:
+def _dqn_section(dqn: Study, collected: tuple[dict, dict], threshold: float, budget: int) -> str:
     """The DQN's arms (conf/experiment/curricula2_dqn.yaml): its measures and each picked
     curriculum against scaffolded_100 by the registered rule; empty while it has no runs."""
-    runs, failed = collect(dqn)
+    runs, failed = collected
     (group, arms), = runs.items()
     if not any(arms.values()):
         return ""
@@ -177,7 +170,7 @@ def render(study: Study, parts: dict[str, dict], runs: dict[str, dict[str, list]
     lines = [
         "# Automatic curricula against the paper's scaffolding: a fair test",
         "",
-        f"Pre-registered in `conf/experiment/{study.experiment}.yaml` ({registration(study.experiment)}), before its "
+        f"Pre-registered in `conf/experiment/{study.experiment}.yaml` ({added_in(study.registration)}), before its "
         "first run: questions, arms, learners, worlds, seeds, measures, the decision rules and the rule that "
         "picks the DQN's arms. Built by `make curricula` (`python -m mediated_transfer.curricula`) from the runs "
         f"under `{Path(cfg.paths.multirun_dir).name}/{study.experiment}/{cfg.scale.name}/`. Scale `{cfg.scale.name}`: "
@@ -194,9 +187,7 @@ def render(study: Study, parts: dict[str, dict], runs: dict[str, dict[str, list]
     lines += _verdict_lines("Q2: does a feedback curriculum's order of C, with the paper's hand-over, beat "
                             "Algorithm 2's order?", {g: p["w2"] for g, p in parts.items()})
     lines += [
-        "The registered rule: an arm *beats* scaffolded transfer (N_source = 100) for a learner in a world when "
-        "the 95 % bootstrap interval of its mean L_R over scaffolded's lies entirely below 1, is *worse* when it "
-        "lies entirely above 1, and is *undecided* otherwise; the same words against regular transfer.",
+        RULE,
         "",
         READING_START, reading.strip() or "(to be written after reading the results)", READING_END, "",
         "## Exposure beside L_R", "",

@@ -6,13 +6,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 from pathlib import Path
 
 from omegaconf import DictConfig
 
 from hydra.core.override_parser.overrides_parser import OverridesParser
 
-from ..config.compose import compose_config, prepare_overrides
+from ..config.compose import CONF_DIR, compose_config, prepare_overrides
+from ..reporting.collect import collect_sweep
 from ..reporting.compose import variant_of
 from ..sweep import planned_jobs
 
@@ -66,6 +68,26 @@ class Study:
     def config(self) -> DictConfig:
         return self.groups[0].config
 
+    @property
+    def registration(self) -> Path:
+        """Its experiment file: questions, arms, seeds, measures and rules, committed before its runs."""
+        return CONF_DIR / "experiment" / f"{self.experiment}.yaml"
+
+
+Collected = tuple[dict[str, dict[str, list]], dict[str, dict[str, int]]]
+"""group -> arm -> its finished runs, and group -> arm -> its failed runs' count."""
+
+
+class StudyRuns(NamedTuple):
+    """What the report reads: the linear groups', the DQN's and the first study's runs."""
+
+    linear: Collected
+    dqn: Collected
+    first: Collected
+
+    def results(self):
+        return [r for runs, _ in self for arms in runs.values() for arm in arms.values() for r in arm]
+
 
 def load_study(overrides: Sequence[str] = (), experiment: str = EXPERIMENT,
                references: tuple[str, ...] = PAPER_ARMS) -> Study:
@@ -101,3 +123,17 @@ def load_first_study(overrides: Sequence[str] = ()) -> Study:
     kept = [o for o in prepare_overrides(overrides) if o.startswith(("scale=", "paths.", "tracking="))]
     studies = [load_study([*kept, f"representation={r}"], FIRST_EXPERIMENT) for r in ("rbf", "fsr")]
     return Study(FIRST_EXPERIMENT, tuple(g for s in studies for g in s.groups), studies[0].cells, studies[0].seeds)
+
+
+def collect(study: Study) -> tuple[dict[str, dict[str, list]], dict[str, dict[str, int]]]:
+    """group -> arm -> its finished runs (registered seeds only), and the failed ones' counts."""
+    runs, failed = {}, {}
+    for group in study.groups:
+        cfg = group.config
+        cells = collect_sweep(group.sweep_dir, str(cfg.algorithm.name), group.representation,
+                              int(cfg.scale.budget), int(cfg.scale.eval_points), group.variant,
+                              int(cfg.scale.eval_episodes))
+        runs[group.name] = {c: [r for r in cells[c].results if r.seed in study.seeds] if c in cells else []
+                            for c in study.cells}
+        failed[group.name] = {c: len(cells[c].failed) if c in cells else 0 for c in study.cells}
+    return runs, failed

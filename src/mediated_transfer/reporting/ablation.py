@@ -36,6 +36,7 @@ from .figures import RunPanel, plot_run_panels
 from .intervals import format_interval, iqm, ratio_of_means, sem
 from .reproduction.runs import MAX_REWARD, THRESHOLD, never_learns
 from .reproduction.tables import NEVER_LEARN_COLUMNS, never_learn_row
+from ..studies import Study, Written, command
 
 EXPERIMENT = "dqn_failure_ablation"
 CELL = "none_0"
@@ -235,7 +236,8 @@ def by_seed(order: list[Arm], table_i: tuple[int, int]) -> list[str]:
     return lines + [""]
 
 
-def main(argv: list[str] | None = None) -> int:
+def study(argv: list[str]) -> Study:
+    """The ablation as a registration -> runs -> measures -> report (studies/shape.py)."""
     parser = argparse.ArgumentParser(prog="python -m mediated_transfer.reporting.ablation",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--root", default=".", help="the checkout whose multirun/ holds the runs")
@@ -244,14 +246,21 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     root = Path(args.root)
     out = Path(args.out) if args.out else root / "reports" / f"{EXPERIMENT}.md"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    arms, diverged = load(root, args.scale)
-    table_i = table_i_values()
-    figure = plot(arms, table_i, out.with_suffix(".png")).name if arms.get(table_i) else None
-    out.write_text(render(arms, table_i, diverged, figure))
-    print(f"wrote {out}" + (f" and {out.with_suffix('.png')}" if figure else ""))
-    return 0
 
+    def report(measured: tuple[dict[tuple[int, int], Arm], list[RunResult], tuple[int, int]]) -> Written:
+        arms, diverged, table_i = measured
+        out.parent.mkdir(parents=True, exist_ok=True)
+        figure = plot(arms, table_i, out.with_suffix(".png")) if arms.get(table_i) else None
+        return Written({out: render(arms, table_i, diverged, figure and figure.name)}, [figure] if figure else [])
+
+    # The measures are the rule's counts and tests, taken as render words them: Table I's values
+    # join the runs here, as the registration fixed them.
+    return Study(EXPERIMENT, f"conf/experiment/{EXPERIMENT}.yaml", lambda: load(root, args.scale),
+                 lambda runs: (*runs, table_i_values()), report,
+                 lambda runs: [r for arm in runs[0].values() for r in arm.runs] + runs[1])
+
+
+main = command(study)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -14,41 +14,34 @@ import sys
 from dataclasses import replace
 
 from ..reporting.build import reports_dir
-from ..reporting.compose import USER_ERRORS, one_line
+from ..studies import Study, command, split_options
 from .measures import Measures
-from .report import write_report
-from .study import load_study
+from .report import collect, measure, report
+from .study import EXPERIMENT, load_study
 
 OPTIONS = {"--random-episodes": "random_episodes", "--resamples": "resamples"}
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else list(argv)
-    if any(a in ("-h", "--help") for a in args):
-        print(__doc__)
-        return 0
-    measures, overrides = Measures(), []
-    try:
-        for arg in args:
-            name, _, value = arg.partition("=")
-            if name in OPTIONS:
-                if not value.isdigit() or int(value) < 1:
-                    raise ValueError(f"{name} must be a positive integer, got {value!r}")
-                measures = replace(measures, **{OPTIONS[name]: int(value)})
-            elif arg.startswith("--"):
-                raise ValueError(f"unknown option {name}; allowed: {', '.join(OPTIONS)}")
-            else:
-                overrides.append(arg)
-        study = load_study(overrides)
-        # A variant's report goes to variants/<variant>/, as the tables' do: it never overwrites
-        # the study's own.
-        paths = write_report(study, measures, reports_dir(study.config, study.variant),
-                             progress=lambda line: print(line, file=sys.stderr))
-    except USER_ERRORS as error:
-        raise SystemExit(f"error: {one_line(error)}") from None
-    print("sensitivity: " + ", ".join(map(str, paths)))
-    return 0
+def sensitivity(args: list[str]) -> Study:
+    """The study as a registration -> runs -> measures -> report (studies/shape.py)."""
+    options, overrides = split_options(args, OPTIONS)
+    measures = Measures()
+    for name, value in options.items():
+        if not value.isdigit() or int(value) < 1:
+            raise ValueError(f"{name} must be a positive integer, got {value!r}")
+        measures = replace(measures, **{OPTIONS[name]: int(value)})
+    study = load_study(overrides)
+    # A variant's report goes to variants/<variant>/, as the tables' do: it never overwrites
+    # the study's own.
+    out = reports_dir(study.config, study.variant)
+    return Study(
+        "sensitivity", f"conf/experiment/{EXPERIMENT}.yaml", lambda: collect(study),
+        lambda runs: measure(study, runs, measures, progress=lambda line: print(line, file=sys.stderr)),
+        lambda results: report(study, results, measures, out),
+        lambda runs: [r for cells in runs.values() for c in cells.values() for r in (*c.results, *c.failed)])
 
+
+main = command(sensitivity, __doc__)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -13,7 +13,11 @@ import numpy as np
 from scipy import stats
 
 from ..metrics import time_to_threshold
+from ..reporting.paper import paper_rows
 from ..results import RunResult
+
+PAPER_TABLE = "II"
+"""The paper's table of the study's learner (linear Q(lambda) + RBF)."""
 
 
 @dataclass(frozen=True)
@@ -107,3 +111,18 @@ def arm_gain(cell: str, arm: Sequence[RunResult], none: Sequence[RunResult], thr
         reward_loss_ratio=ratio_interval(losses_arm, losses_none, np.mean, measures),
         threshold_time=time, threshold_time_ratio=ratio_interval(curves_arm, curves_none, time_of, measures),
         threshold_reached=time_to_threshold(steps, curves_arm.mean(axis=0), threshold) is not None)
+
+
+def paper_gains() -> dict[str, tuple[float, float | None]]:
+    """The paper's gain of each transfer row of Table II over its row without transfer:
+    (L_R ratio, time-to-threshold ratio or None)."""
+    rows = {r.cell: r for r in paper_rows(PAPER_TABLE)}
+    none = rows["none_0"]
+    gains = {}
+    for cell, row in rows.items():
+        if cell == "none_0":
+            continue
+        time = (row.time_to_threshold / none.time_to_threshold
+                if row.time_to_threshold and none.time_to_threshold else None)
+        gains[cell] = (row.reward_loss_mean / none.reward_loss_mean, time)
+    return gains

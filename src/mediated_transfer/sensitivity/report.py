@@ -20,19 +20,17 @@ import pandas as pd
 from ..atomic import atomic_write_text
 from ..metrics import median_time
 from ..reporting.collect import CellRuns, collect_sweep
-from ..reporting.figures import _pyplot
 from ..reporting.formats import write_csv
 from ..reporting.intervals import sem
-from ..reporting.paper import paper_rows
-from .measures import ArmGain, Measures, arm_gain
+from .figures import plot
+from .measures import ArmGain, Measures, arm_gain, paper_gains
 from ..env.scripted import random_success_rate
+from ..studies import Written
 from .study import Study, World
 
 REPORT = "SENSITIVITY.md"
 READING_START = "<!-- reading: written by hand, kept when the report is rebuilt -->"
 READING_END = "<!-- /reading -->"
-PAPER_TABLE = "II"
-"""The paper's table of the study's learner (linear Q(lambda) + RBF)."""
 
 
 @dataclass
@@ -52,47 +50,42 @@ class WorldResult:
     gains: dict[str, ArmGain] = field(default_factory=dict)
 
 
-def measure(study: Study, measures: Measures, progress=print) -> list[WorldResult]:
+def collect(study: Study) -> dict[str, dict[str, CellRuns]]:
+    """The study's runs: world -> arm -> its runs (arms of the study only)."""
+    cfg = study.config
+    runs = {}
+    for world in study.worlds:
+        cells: dict[str, CellRuns] = collect_sweep(
+            study.sweep_dir, str(cfg.algorithm.name), str(cfg.representation.name), int(cfg.scale.budget),
+            int(cfg.scale.eval_points), world.variant, int(cfg.scale.eval_episodes))
+        runs[world.option] = {name: c for name, c in cells.items() if name in study.cells}
+    return runs
+
+
+def measure(study: Study, runs: dict[str, dict[str, CellRuns]], measures: Measures,
+            progress=print) -> list[WorldResult]:
     cfg = study.config
     threshold, budget = float(cfg.threshold), int(cfg.scale.budget)
     rates = _random_rates(study, measures, progress)
     results = []
     for world in study.worlds:
-        cells: dict[str, CellRuns] = collect_sweep(
-            study.sweep_dir, str(cfg.algorithm.name), str(cfg.representation.name), budget,
-            int(cfg.scale.eval_points), world.variant, int(cfg.scale.eval_episodes))
-        cells = {name: c for name, c in cells.items() if name in study.cells}
+        cells = runs[world.option]
         row = WorldResult(world, world.changes(study.baseline.config), rates[world.option],
                           {c: len(cells[c].results) if c in cells else 0 for c in study.cells},
                           {c: len(cells[c].failed) for c in study.cells if c in cells and cells[c].failed})
         none = cells.get("none_0")
         if none is not None and none.results:
-            runs = none.results
-            row.discovery_median = median_time([r.first_target_reward_step for r in runs])
-            row.learning_median = median_time([r.learning_span(threshold) for r in runs])
-            losses = np.array([r.reward_loss for r in runs])
+            runs_none = none.results
+            row.discovery_median = median_time([r.first_target_reward_step for r in runs_none])
+            row.learning_median = median_time([r.learning_span(threshold) for r in runs_none])
+            losses = np.array([r.reward_loss for r in runs_none])
             row.reward_loss_none = float(losses.mean())
             row.reward_loss_none_sem = sem(losses)
             for cell in study.transfer_cells:
                 if cell in cells and cells[cell].results:
-                    row.gains[cell] = arm_gain(cell, cells[cell].results, runs, threshold, budget, measures)
+                    row.gains[cell] = arm_gain(cell, cells[cell].results, runs_none, threshold, budget, measures)
         results.append(row)
     return results
-
-
-def paper_gains() -> dict[str, tuple[float, float | None]]:
-    """The paper's gain of each transfer row of Table II over its row without transfer:
-    (L_R ratio, time-to-threshold ratio or None)."""
-    rows = {r.cell: r for r in paper_rows(PAPER_TABLE)}
-    none = rows["none_0"]
-    gains = {}
-    for cell, row in rows.items():
-        if cell == "none_0":
-            continue
-        time = (row.time_to_threshold / none.time_to_threshold
-                if row.time_to_threshold and none.time_to_threshold else None)
-        gains[cell] = (row.reward_loss_mean / none.reward_loss_mean, time)
-    return gains
 
 
 def table(results: list[WorldResult], study: Study) -> pd.DataFrame:
@@ -118,73 +111,6 @@ def table(results: list[WorldResult], study: Study) -> pd.DataFrame:
     return pd.DataFrame.from_records(records)
 
 
-def plot(results: list[WorldResult], study: Study, path: Path) -> Path:
-    """The gain (L_R ratio, time-to-threshold ratio; lower is a larger gain) of each transfer arm
-    against discovery rarity (random policy's success rate) and post-discovery learning time,
-    every world on one picture, the paper's gains as dashed lines."""
-    plt = _pyplot()
-    from matplotlib.lines import Line2D
-    from matplotlib.ticker import FuncFormatter, PercentFormatter
-
-    paper = paper_gains()
-    fig, axes = plt.subplots(2, 2, figsize=(12, 9), sharey="row")
-    markers = {"regular": "o", "scaffolded": "s"}
-    colors = plt.get_cmap("tab10")
-    for row, (what, label) in enumerate([("reward_loss_ratio", "L_R ratio (transfer / none)"),
-                                         ("threshold_time_ratio", "time-to-threshold ratio (transfer / none)")]):
-        for col, (x_of, x_label, percent) in enumerate([
-                (lambda r: r.random_success, "random policy's success rate on target tasks (discovery rarity)", True),
-                (lambda r: r.learning_median, "median steps from first reward to <R> >= 8, without transfer", False)]):
-            ax = axes[row, col]
-            for k, r in enumerate(results):
-                x = x_of(r)
-                if x is None or not x > 0:
-                    continue
-                for cell, gain in r.gains.items():
-                    interval = getattr(gain, what)
-                    strategy = cell.split("_")[0]
-                    # Scaffolded a little to the right, so both arms of a world stay visible.
-                    shift = 1.0 if strategy == "regular" else 1.02
-                    err = [[max(0.0, interval.value - interval.low)], [max(0.0, interval.high - interval.value)]]
-                    ax.errorbar([x * shift], [interval.value], yerr=err, fmt=markers.get(strategy, "^"),
-                                color=colors(k % 10), capsize=3, alpha=0.9,
-                                mfc=colors(k % 10) if strategy == "regular" else "white")
-            for cell, (loss, time) in paper.items():
-                if cell in study.transfer_cells:
-                    value = loss if row == 0 else time
-                    if value is not None:
-                        ax.axhline(value, ls="--", lw=1, color="0.4" if cell.startswith("regular") else "0.7")
-                        ax.text(1.0, value, f" paper {cell}", transform=ax.get_yaxis_transform(),
-                                fontsize=7, va="center", color="0.3")
-            ax.axhline(1.0, lw=0.8, color="black")
-            if percent:  # rates, on a linear axis (the worlds span a factor of about 4)
-                ax.xaxis.set_major_formatter(PercentFormatter(1.0, decimals=2))
-            else:
-                ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v / 1000:.0f}k"))
-            ax.set_xlabel(x_label, fontsize=9)
-            if col == 0:
-                ax.set_ylabel(label)
-            ax.grid(alpha=0.3)
-
-    handles = [Line2D([], [], ls="", marker="o", color=colors(k % 10), label=r.world.option)
-               for k, r in enumerate(results)]
-    handles += [Line2D([], [], ls="", marker=markers.get(c.split("_")[0], "^"), color="black",
-                       mfc="black" if c.startswith("regular") else "white", label=c)
-                for c in study.transfer_cells]
-    fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8, frameon=False)
-    for ax in axes.flat:
-        ax.set_ylim(bottom=0)
-    cfg = study.config
-    fig.suptitle(f"Gain from transfer against the task (issue 13): linear Q(lambda) + RBF, "
-                 f"{cfg.scale.budget:,} steps, {len(study.seeds)} seeds per arm\n"
-                 f"filled: regular, open: scaffolded; bars: {int(100 * Measures().confidence)} % "
-                 "bootstrap intervals; below 1 = transfer helps", fontsize=10)
-    fig.tight_layout(rect=(0, 0.12, 1, 0.95))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
 def findings(results: list[WorldResult], study: Study) -> list[str]:
     """Statements read off the measurements (no judgement): per transfer arm, the world with the
     largest gain, and which worlds' intervals reach the paper's gain."""
@@ -206,8 +132,8 @@ def findings(results: list[WorldResult], study: Study) -> list[str]:
     return lines
 
 
-def write_report(study: Study, measures: Measures, reports_dir: Path, progress=print) -> list[Path]:
-    results = measure(study, measures, progress)
+def report(study: Study, results: list[WorldResult], measures: Measures, reports_dir: Path) -> Written:
+    """SENSITIVITY.md's text, its table and figure (written here)."""
     out = reports_dir / "sensitivity"
     out.mkdir(parents=True, exist_ok=True)
     frame = table(results, study)
@@ -238,9 +164,7 @@ def write_report(study: Study, measures: Measures, reports_dir: Path, progress=p
     body = "\n\n".join([*header, table_md, f"![gain against the task](sensitivity/{figure.name})",
                         "## Findings (read off the table)", "\n".join(findings(results, study))])
     path = reports_dir / REPORT
-    reading = _kept_reading(path)
-    atomic_write_text(path, body + "\n\n## Reading\n\n" + reading + "\n")
-    return [path, csv, figure]
+    return Written({path: body + "\n\n## Reading\n\n" + _kept_reading(path) + "\n"}, [csv, figure])
 
 
 def _kept_reading(path: Path) -> str:

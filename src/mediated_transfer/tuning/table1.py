@@ -13,13 +13,15 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from ..atomic import atomic_write_text
+from ..studies import Study, Written, command
+from ..studies import build as build_study
+from .table1_figure import figure, seed_columns
 from .trials import TRIALS_FILE
 from .space import SearchSpace, SearchSpaceError, available_learners, find_search_space, override_value
 from .study import DEFAULTS, study_folder
@@ -33,10 +35,6 @@ def load_trials(path: Path) -> pd.DataFrame:
     stopped = trials["stopped_early"] if "stopped_early" in trials else pd.Series(False, index=trials.index)
     trials["stopped_early"] = stopped.astype(str).str.lower().eq("true")
     return trials
-
-
-def seed_columns(trials: pd.DataFrame, name: str) -> list[str]:
-    return [c for c in trials.columns if c.startswith(f"{name}.seed_")]
 
 
 def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int) -> str:
@@ -116,95 +114,22 @@ def _value(value) -> str:
     return f"{value:.4g}"
 
 
-def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
-    """Objective against each searched key (defaults and best marked), and the discovery /
-    learning split: per seed of every trial, steps to the first rewarded target episode against
-    the steps from there to the first <R> >= 8."""
-    import matplotlib
+class Tuned(NamedTuple):
+    """One learner's stored study: its search space, its trials (None: not tuned yet), its budget."""
 
-    matplotlib.use("Agg")  # files only, no display
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import NullFormatter
-
-    panels = len(space.params) + 1
-    columns = 3
-    rows = math.ceil(panels / columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(4.2 * columns, 3.3 * rows), squeeze=False)
-    best = trials.loc[~trials["stopped_early"], "objective"].idxmin()
-    defaults = trials.index[trials["role"] == DEFAULTS]
-    stopped = trials["stopped_early"]
-    for ax, p in zip(axes.flat, space.params):
-        x = trials[p.key]
-        if p.kind == "choice":
-            labels = [override_value(c) for c in p.choices]
-            position = {override_value(c): i for i, c in enumerate(p.choices)}
-            x = x.map(lambda v: position[override_value(_native(v))])
-            x = x + np.random.default_rng(0).uniform(-0.15, 0.15, len(x))  # jitter: see the spread
-            ax.set_xticks(range(len(labels)), labels)
-            ax.set_xlim(-0.5, len(labels) - 0.5)
-        elif p.log:
-            ax.set_xscale("log")
-            ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels of a short decade overlap
-        ax.scatter(x[~stopped], trials.loc[~stopped, "objective"], s=14, color="0.5", label="trials")
-        if stopped.any():  # at their lower bound: the true L_R lies at or above the marker
-            ax.scatter(x[stopped], trials.loc[stopped, "objective"], s=18, marker="^", facecolors="none",
-                       edgecolors="0.4", label="stopped early (L_R at least)")
-        # Defaults larger and below the best: both stay visible when the defaults are the best.
-        ax.scatter(x[defaults], trials.loc[defaults, "objective"], s=160, marker="*", color="tab:red",
-                   label="provisional defaults", zorder=3)
-        ax.scatter(x[[best]], trials.loc[[best], "objective"], s=60, marker="*", color="tab:green",
-                   label="best", zorder=3)
-        ax.set_xlabel(p.key)
-        ax.set_ylabel("mean reward loss L_R")
-    axes.flat[0].legend(fontsize=7)
-    ax = axes.flat[len(space.params)]
-    discovery = trials[seed_columns(trials, "first_target_reward_step")].to_numpy(dtype=float)
-    span = trials[seed_columns(trials, "learning_span")].to_numpy(dtype=float)
-    objective = np.repeat(trials["objective"].to_numpy()[:, None], discovery.shape[1], axis=1)
-    shown = ~np.isnan(discovery) & ~np.isnan(span)
-    points = ax.scatter(discovery[shown], span[shown], c=objective[shown], s=14, cmap="viridis")
-    for index, color, size in ((defaults, "tab:red", 160), ([best], "tab:green", 60)):
-        for i in index:
-            row = trials.index.get_loc(i)
-            ok = shown[row]
-            ax.scatter(discovery[row][ok], span[row][ok], s=size, marker="*", color=color, zorder=3)
-    # Discovered but never learned: drawn at the budget, so the panel shows both failures.
-    budget = max(int(c.split("@")[1]) for c in trials.columns if c.startswith("mean_reward@"))
-    stuck = ~np.isnan(discovery) & np.isnan(span)
-    ax.scatter(discovery[stuck], np.full(int(stuck.sum()), budget), marker="x", s=14, color="0.6",
-               label="never <R> >= 8 (drawn at the budget)")
-    ax.legend(fontsize=7, loc="best")
-    fig.colorbar(points, ax=ax, label="L_R of the trial")
-    ax.set_xlabel("discovery: first rewarded target episode (step)")
-    ax.set_ylabel("learning: then to first <R> >= 8 (steps)")
-    ran = ~np.isnan(trials[seed_columns(trials, "reward_loss")].to_numpy(dtype=float))  # not: seeds a stopped trial skipped
-    ax.set_title(f"per run: {int((np.isnan(discovery) & ran).sum())} of {int(ran.sum())} never rewarded, "
-                 f"{int(stuck.sum())} rewarded but never <R> >= 8", fontsize=8)
-    for ax in list(axes.flat)[panels:]:
-        ax.axis("off")
-    fig.suptitle(f"{space.learner}: {len(trials)} trials, tuning seeds "
-                 f"{', '.join(c.split('seed_')[1] for c in seed_columns(trials, 'reward_loss'))}")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, metadata={"Software": None})
-    plt.close(fig)
-    return path
+    space: SearchSpace
+    trials: pd.DataFrame | None
+    budget: int
+    folder: Path
+    """tuning/<learner>/: trials.csv and the refinement's table."""
 
 
-def _native(value):
-    # CSV reads true/false as bools or strings depending on the column; compare them as spelt.
-    if isinstance(value, str) and value in ("True", "False"):
-        return value == "True"
-    return value.item() if isinstance(value, np.generic) else value
-
-
-def build(root: Path, scale: str | None = None) -> Path:
-    """Write <reports dir>/table1.md and its figures from <root>/tuning/*/trials.csv."""
+def load(root: Path, scale: str | None = None) -> tuple[list[Tuned], Path]:
+    """Every search space's committed trials (<root>/tuning/*/trials.csv), and the reports folder."""
     from ..config.compose import compose_config
 
     root = Path(root)
-    sections = []
-    out_dir = None
+    tuned, out_dir = [], None
     scales = {}  # composing takes a moment: once per scale
     for learner in available_learners():
         space = find_search_space(learner).with_scale(scale)
@@ -213,22 +138,42 @@ def build(root: Path, scale: str | None = None) -> Path:
         scale_cfg = scales[space.scale]
         out_dir = Path(scale_cfg.paths.reports_dir)
         csv = study_folder(root, space) / TRIALS_FILE
-        trials = load_trials(csv) if csv.is_file() else None
-        sections.append(learner_section(space, trials, int(scale_cfg.scale.budget)))
-        sections.append(_refinement_section(space, csv.parent))
-        if trials is not None and not trials.empty:
-            figure(space, trials, out_dir / f"table1_{space.learner}.png")
+        tuned.append(Tuned(space, load_trials(csv) if csv.is_file() else None, int(scale_cfg.scale.budget),
+                           csv.parent))
+    return tuned, out_dir
+
+
+def sections(tuned: list[Tuned]) -> list[str]:
+    """Per learner, what its trials measured (best, defaults, median, the split) and its refinement."""
+    return [text for t in tuned
+            for text in (learner_section(t.space, t.trials, t.budget), _refinement_section(t.space, t.folder))]
+
+
+def report(tuned: list[Tuned], out_dir: Path, texts: list[str]) -> Written:
+    """table1.md's text, and each tuned learner's figure (drawn here)."""
+    figures = [figure(t.space, t.trials, out_dir / f"table1_{t.space.learner}.png")
+               for t in tuned if t.trials is not None and not t.trials.empty]
     text = "\n".join([
         "# Table I: hyperparameters, tuned by random search (issue 9)", "",
         "Built by `make table1` from the committed `tuning/<learner>/trials.csv`; the studies "
         "themselves are `tuning/<learner>/study.db` (resume with `make tune LEARNER=...`). As in the "
         "paper, each learner is tuned for the runs WITHOUT transfer only, on tuning seeds that are "
         "not the table seeds; a stronger baseline can shrink the measured gain from transfer.", "",
-        *sections,
+        *texts,
     ])
-    out_dir.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out_dir / TABLE_FILE, text)
-    return out_dir / TABLE_FILE
+    return Written({out_dir / TABLE_FILE: text}, figures)
+
+
+def study(root: Path, scale: str | None = None) -> Study:
+    """Table I as a registration -> runs -> measures -> report (studies/shape.py): its
+    registration is the search spaces, fixed before their trials."""
+    return Study("table1", "conf/hparams_search/", lambda: load(root, scale),
+                 lambda loaded: (*loaded, sections(loaded[0])), lambda measured: report(*measured))
+
+
+def build(root: Path, scale: str | None = None) -> list[Path]:
+    """Write <reports dir>/table1.md and its figures from <root>/tuning/*/trials.csv."""
+    return build_study(study(root, scale))
 
 
 def tuned_values(space: SearchSpace) -> dict:
@@ -257,19 +202,16 @@ def _refinement_section(space: SearchSpace, folder: Path) -> str:
     return section(refinement, pd.read_csv(folder / REFINE_FILE))
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def _study(argv: list[str]) -> Study:
     parser = argparse.ArgumentParser(prog="python -m mediated_transfer.tuning.table1", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--root", type=Path, default=Path("."), help="project root: tuning/, reports/")
     parser.add_argument("--scale", default=None, help="the studies' scale (default: each search space's)")
     args = parser.parse_args(argv)
-    try:
-        print(build(args.root, args.scale))
-    except SearchSpaceError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
-    return 0
+    return study(args.root, args.scale)
 
+
+main = command(_study)
 
 if __name__ == "__main__":
     sys.exit(main())

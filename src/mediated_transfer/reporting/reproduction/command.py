@@ -4,15 +4,20 @@ README's headline."""
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
+from ...studies import Study, Written, command
+from .claim import Claim
 from .claims import evaluate
 from .document import render
 from .headline import headline, with_headline
-from .runs import load
+from .runs import Learner, load
 
 
-def main(argv: list[str] | None = None) -> int:
+def study(argv: list[str]) -> Study:
+    """The reproduction as a registration -> runs -> measures -> report (studies/shape.py): its
+    registration is each claim's rule, beside the claim (claims/, verdicts.py)."""
     parser = argparse.ArgumentParser(prog="python -m mediated_transfer.reporting.reproduction",
                                      description="reports/REPRODUCTION.md, a verdict on each of the paper's six "
                                      "headline claims from the committed paper-scale runs of Tables II-IV, and "
@@ -21,16 +26,29 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=None, help="where to write (default: <root>/reports/REPRODUCTION.md)")
     args = parser.parse_args(argv)
     root = Path(args.root)
-    learners = load(root)
-    if not any(lr.cells for lr in learners.values()):
-        raise SystemExit(f"no paper-scale runs under {root / 'multirun'}: run make reproduce-tables first")
     out = Path(args.out) if args.out else root / "reports" / "REPRODUCTION.md"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    claims = evaluate(learners)
-    out.write_text(render(learners, claims))
-    print(f"wrote {out}")
     readme = root / "README.md"
-    if args.out is None and readme.is_file():  # the headline of the README beside the report
-        readme.write_text(with_headline(readme.read_text(), headline(learners, claims)))
-        print(f"wrote the headline of {readme}")
-    return 0
+
+    def runs() -> dict[str, Learner]:
+        learners = load(root)
+        if not any(lr.cells for lr in learners.values()):
+            raise SystemExit(f"no paper-scale runs under {root / 'multirun'}: run make reproduce-tables first")
+        return learners
+
+    def report(measured: tuple[dict[str, Learner], list[Claim]]) -> Written:
+        learners, claims = measured
+        texts = {out: render(learners, claims)}
+        if args.out is None and readme.is_file():  # the headline of the README beside the report
+            texts[readme] = with_headline(readme.read_text(), headline(learners, claims))
+        return Written(texts)
+
+    return Study("reproduction", "reporting/reproduction/claims/ and reporting/verdicts.py", runs,
+                 lambda learners: (learners, evaluate(learners)), report,
+                 lambda learners: [r for lr in learners.values() for c in lr.cells.values()
+                                   for r in (*c.results, *c.failed)])
+
+
+main = command(study)
+
+if __name__ == "__main__":
+    sys.exit(main())
