@@ -30,14 +30,13 @@ from . import metrics, plugins
 from .env import sample_tasks
 from .env.mediated_env import MediatedInteractionEnv
 from .learners.base import Learner
-from .provenance import RESULTS_FORMAT
-from .results import RunResult
+from .results import RESULTS_FORMAT, RunResult
 from .transfer.choices import EpisodeChoices
 from .transfer.source_tasks import source_task_set
 from .transfer.strategy import EpisodeOutcome, Strategy, StrategyContext, solved_count, start_episode, wants_td_error
 
 if TYPE_CHECKING:
-    from .run import RunSpec
+    from .runspec import RunSpec
 
 # Independent random streams of one run, all derived from its seed (never the seed itself:
 # default_rng(seed) is also the source pool's stream when seed == source_set_seed).

@@ -29,6 +29,10 @@ from .stored.codec import encode
 __all__ = ["CURVE_FILE", "RESULT_FILE", "DamagedResult", "RunResult"]
 
 
+RESULTS_FORMAT = 2
+"""Version of result.json's layout (2: code version and discovery step recorded)."""
+
+
 @dataclass
 class RunResult:
     algorithm: str
@@ -62,7 +66,7 @@ class RunResult:
     """The code that computed it: git commit, dirty tree, digest of the computing sources
     (provenance.code_version)."""
     results_format: int | None = None
-    """provenance.RESULTS_FORMAT when written; None: written before formats were recorded."""
+    """RESULTS_FORMAT when written; None: written before formats were recorded."""
     failure: str | None = None
     """Why the run was stopped as failed (e.g. its learner diverged); None: it ran its budget.
     A failed run's reward loss is NaN (null in result.json) and it has no time to threshold."""

@@ -10,11 +10,8 @@ run keeps: result.json writes it as ``"inf"`` (stored/codec.py), so the same com
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
-from typing import TYPE_CHECKING, Any, Iterator
-
-if TYPE_CHECKING:
-    from ..run import RunSpec
+from collections.abc import Iterable, Mapping
+from typing import Any, Iterator
 
 INFINITY_MEANS: dict[tuple[str, str], str] = {
     ("dqn", "huber_delta"): "the squared TD error (a Huber loss without its linear part)",
@@ -23,13 +20,10 @@ INFINITY_MEANS: dict[tuple[str, str], str] = {
 """(algorithm option, key) -> what ``inf`` means for it; any other key must be finite."""
 
 
-def check_finite(spec: "RunSpec") -> None:
-    """ValueError (one line, naming the key) for a non-finite number ``spec`` cannot run with."""
-    groups = (("algorithm", spec.algorithm, spec.algorithm_params),
-              ("representation", spec.representation, spec.representation_params),
-              ("strategy", spec.strategy, spec.strategy_params),
-              ("env", None, asdict(spec.world)),
-              ("", None, {"threshold": spec.threshold}))
+def check_finite(groups: Iterable[tuple[str, str | None, Mapping[str, Any]]]) -> None:
+    """ValueError (one line, naming the key) for a non-finite number a run cannot run with.
+    ``groups``: (config group, its option, its keys), e.g. ("algorithm", "dqn", {...}); "" for
+    the top level."""
     for group, option, params in groups:
         for key, value in _numbers(params):
             if math.isfinite(value) or (value == math.inf and (option, key) in INFINITY_MEANS):

@@ -29,7 +29,7 @@ from ..results import RunResult
 from .group import DEVICES, LearnerGroup, PerSeedLearners
 
 if TYPE_CHECKING:
-    from ..run import RunSpec
+    from ..runspec import RunSpec
 
 log = logging.getLogger("mediated_transfer")
 

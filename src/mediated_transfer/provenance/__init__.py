@@ -30,13 +30,12 @@ import subprocess
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..results import RESULTS_FORMAT  # noqa: F401 - read here by staleness and its callers
 from .closure import PROJECT, closure_digest
 
 if TYPE_CHECKING:
-    from ..run import RunSpec
+    from ..runspec import RunSpec
 
-RESULTS_FORMAT = 2
-"""Version of result.json's layout (2: code version and discovery step recorded)."""
 SCHEME = 3
 """Version of the code digest (3: the closure of a run's roots; 2: whole computing files)."""
 PACKAGE = Path(__file__).resolve().parents[1]

@@ -3,14 +3,10 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from ..reporting.figures import _pyplot
-from .measures import Measures, paper_gains
+from .measures import Measures, WorldResult, paper_gains
 from .study import Study
-
-if TYPE_CHECKING:  # report.py draws with this module
-    from .report import WorldResult
 
 
 def plot(results: list[WorldResult], study: Study, path: Path) -> Path:

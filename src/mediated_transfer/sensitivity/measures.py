@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
@@ -15,6 +15,7 @@ from scipy import stats
 from ..metrics import time_to_threshold
 from ..reporting.paper import paper_rows
 from ..results import RunResult
+from .study import World
 
 PAPER_TABLE = "II"
 """The paper's table of the study's learner (linear Q(lambda) + RBF)."""
@@ -126,3 +127,20 @@ def paper_gains() -> dict[str, tuple[float, float | None]]:
                 if row.time_to_threshold and none.time_to_threshold else None)
         gains[cell] = (row.reward_loss_mean / none.reward_loss_mean, time)
     return gains
+
+
+@dataclass
+class WorldResult:
+    world: World
+    changes: str
+    random_success: float
+    runs: dict[str, int]
+    """Finished runs per cell (failed ones not counted)."""
+    failed: dict[str, int]
+    discovery_median: float | None = None
+    """Median learning step of the first rewarded target episode, without transfer."""
+    learning_median: float | None = None
+    """Median steps from that reward to the first <R> >= threshold, without transfer."""
+    reward_loss_none: float | None = None
+    reward_loss_none_sem: float | None = None
+    gains: dict[str, ArmGain] = field(default_factory=dict)

@@ -11,7 +11,6 @@ import hashlib
 import json
 import math
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,7 +22,7 @@ from ..reporting.collect import CellRuns, collect_sweep
 from ..reporting.formats import write_csv
 from ..reporting.intervals import sem
 from .figures import plot
-from .measures import ArmGain, Measures, arm_gain, paper_gains
+from .measures import Measures, WorldResult, arm_gain, paper_gains
 from ..env.scripted import random_success_rate
 from ..studies import Written
 from .study import Study, World
@@ -31,23 +30,6 @@ from .study import Study, World
 REPORT = "SENSITIVITY.md"
 READING_START = "<!-- reading: written by hand, kept when the report is rebuilt -->"
 READING_END = "<!-- /reading -->"
-
-
-@dataclass
-class WorldResult:
-    world: World
-    changes: str
-    random_success: float
-    runs: dict[str, int]
-    """Finished runs per cell (failed ones not counted)."""
-    failed: dict[str, int]
-    discovery_median: float | None = None
-    """Median learning step of the first rewarded target episode, without transfer."""
-    learning_median: float | None = None
-    """Median steps from that reward to the first <R> >= threshold, without transfer."""
-    reward_loss_none: float | None = None
-    reward_loss_none_sem: float | None = None
-    gains: dict[str, ArmGain] = field(default_factory=dict)
 
 
 def collect(study: Study) -> dict[str, dict[str, CellRuns]]:
