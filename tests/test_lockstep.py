@@ -197,7 +197,7 @@ def test_a_group_holds_runs_of_one_configuration_with_distinct_seeds():
 def test_launchers_group_the_unfinished_seeds_of_each_cell():
     from omegaconf import OmegaConf
 
-    from mediated_transfer.lockstep.launch import lockstep_groups
+    from mediated_transfer.sweep.groups import lockstep_groups
 
     jobs = [[f"seed={s}", f"cell={c}"] for s in range(5) for c in ("none_0", "regular_1")]
     finished = {("none_0", 1), ("regular_1", 0)}

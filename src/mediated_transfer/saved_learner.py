@@ -31,14 +31,12 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from .atomic import atomic_write
+from .stored import DQN_FILE, LEARNER_FILES, LINEAR_FILE
 
 if TYPE_CHECKING:
     from .learners.base import Learner
-    from .run import RunSpec
+    from .runspec import RunSpec
 
-LINEAR_FILE = "learner.npz"
-DQN_FILE = "learner.pt"
-FILES = (LINEAR_FILE, DQN_FILE)
 FORMAT = 1
 """Version of the saved-learner files; a file of another version is refused."""
 
@@ -75,7 +73,7 @@ def save_learner(learner: "Learner", spec: "RunSpec", folder: str | os.PathLike)
 def forget_learner(folder: str | os.PathLike) -> None:
     """Remove a saved learner from ``folder`` (a run about to be recomputed there must not
     leave an older run's learner next to its new result)."""
-    for name in FILES:
+    for name in LEARNER_FILES:
         (Path(folder) / name).unlink(missing_ok=True)
 
 
@@ -91,13 +89,13 @@ def load_learner(folder: str | os.PathLike) -> tuple["Learner", "RunSpec"]:
     if not folder.is_dir():
         raise SavedLearnerError(f"{folder} is not a folder (give a run's folder, the one "
                                 "holding result.json)")
-    found = [folder / name for name in FILES if (folder / name).is_file()]
+    found = [folder / name for name in LEARNER_FILES if (folder / name).is_file()]
     if not found:
         if not (folder / "result.json").is_file():
             raise SavedLearnerError(f"{folder} is not a run's folder (no result.json, no "
-                                    f"{' or '.join(FILES)})")
+                                    f"{' or '.join(LEARNER_FILES)})")
         raise SavedLearnerError(
-            f"{folder} holds no saved learner ({' or '.join(FILES)}): the run finished before "
+            f"{folder} holds no saved learner ({' or '.join(LEARNER_FILES)}): the run finished before "
             "runs saved their learner, or ran with save_learner=false; run it again under "
             "another paths.root to get one (a finished run is skipped, not recomputed)"
         )

@@ -1,6 +1,6 @@
 """``hydra/launcher=parallel`` (the default): Hydra's joblib launcher, one worker process per
 core, which hands a cell's seeds to one worker as a lockstep group when ``lockstep.runs`` (or a
-GPU device) asks for groups (mediated_transfer.lockstep.launch). Without groups it is Hydra's
+GPU device) asks for groups (mediated_transfer.sweep.groups). Without groups it is Hydra's
 joblib launcher, except that a worker that dies ends the sweep in one line, and so does a full
 disk or a damaged MLflow store (mediated_transfer.sweep.faults), once the other jobs have ended.
 """
@@ -35,7 +35,7 @@ ConfigStore.instance().store(group="hydra/launcher", name="mediated_joblib", nod
 def _execute_group(indices: List[int], overrides: List[List[str]], hydra_context: Any, config: DictConfig,
                    singleton_state: Dict[Any, Any]) -> List[JobReturn]:
     """In a worker: the group's jobs, configured as Hydra's joblib launcher configures a job."""
-    from mediated_transfer.lockstep.launch import run_group
+    from mediated_transfer.sweep.groups import run_group
 
     setup_globals()
     Singleton.set_state(singleton_state)
@@ -95,7 +95,7 @@ class MediatedJoblibLauncher(JoblibLauncher):
     def _launch(self, job_overrides: Sequence[Sequence[str]], initial_job_idx: int) -> Sequence[JobReturn]:
         from joblib import Parallel, delayed
 
-        from mediated_transfer.lockstep.launch import lockstep_groups
+        from mediated_transfer.sweep.groups import lockstep_groups
         from mediated_transfer.slurm.jobs import is_finished, place_of
 
         assert self.config is not None and self.hydra_context is not None

@@ -74,10 +74,10 @@ class MediatedSlurmLauncher(SlurmLauncher):
     def run_lockstep_group(self, group: list[tuple[list[str], int, str]],
                            singleton_state: dict) -> list[tuple[str, JobReturn]]:
         """In the SLURM job: the group's runs as Hydra jobs (folders, logs, MLflow runs),
-        computed together in lockstep (mediated_transfer.lockstep.launch.run_group)."""
+        computed together in lockstep (mediated_transfer.sweep.groups.run_group)."""
         import submitit
 
-        from mediated_transfer.lockstep.launch import run_group
+        from mediated_transfer.sweep.groups import run_group
 
         Singleton.set_state(singleton_state)
         setup_globals()

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING, Any
 from omegaconf import DictConfig, OmegaConf
 
 from .compose import ConfigError
-from .mapping import config_from_mapping
+from ..mapping import config_from_mapping
 
 if TYPE_CHECKING:
-    from ..run import RunSpec
+    from ..runspec import RunSpec
 
 
 def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
@@ -51,7 +51,7 @@ def spec_from_dict(values: Mapping[str, Any]) -> "RunSpec":
     """A RunSpec from plain values (``spec_values``' or a saved learner's); unknown keys are errors."""
     # Imported here: the learners and the environment load only when a run is configured.
     from ..env.config import WorldConfig
-    from ..run import RunSpec
+    from ..runspec import RunSpec
 
     values = dict(values)
     world = values.pop("world", None)

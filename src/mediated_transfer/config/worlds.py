@@ -12,7 +12,7 @@ from omegaconf import OmegaConf
 
 from ..env.config import WorldConfig
 from .compose import CONF_DIR, compose_config
-from .mapping import config_from_mapping
+from ..mapping import config_from_mapping
 
 
 def env_options() -> list[str]:

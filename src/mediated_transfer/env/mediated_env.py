@@ -10,7 +10,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from ..config.mapping import config_from_mapping
+from ..mapping import config_from_mapping
 from .config import WorldConfig
 from .task import NUM_DISTANCES, O, PICKING_LOCATIONS, SCENARIOS, T, Task, sample_task
 from .world import World

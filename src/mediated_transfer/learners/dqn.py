@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..env.task import OBSERVATION_SIZE
+from ..mapping import config_from_mapping
 from .dqn_config import (KERNELS, MAX_TORCH_THREADS, NUM_BINARY, DQNConfig, forward_flops, layer_shapes,
                          update_flops)
 from .dqn_network import F, QNetwork, torch  # torch, or without the deep extra its stand-in
@@ -168,8 +169,6 @@ class DQNLearner:
     @classmethod
     def from_params(cls, *, representation=None, num_actions: int, seed: int, world=None, **params) -> "DQNLearner":
         """``algorithm=dqn``'s ``_target_``: the learner of the group's keys."""
-        from ..config.mapping import config_from_mapping
-
         return cls(config_from_mapping(DQNConfig, params, "algorithm"), num_actions, seed)
 
     def __init__(self, config: DQNConfig | None = None, num_actions: int = 11, seed: int = 0):

@@ -15,7 +15,7 @@ import os
 from typing import Any, Mapping
 
 from .. import plugins
-from ..config.mapping import config_from_mapping
+from ..mapping import config_from_mapping
 from ..env.config import WorldConfig
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
 from .base import Learner

@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..mapping import config_from_mapping
 from ._distance_ranges import check_numbers_and_ranges, check_positive_int
 
 NUM_BINARY = len(PICKING_LOCATIONS)
@@ -60,8 +61,6 @@ class FSRRepresentation:
     @classmethod
     def from_params(cls, **params) -> "FSRRepresentation":
         """``representation``'s ``_target_``: the feature map of the group's keys."""
-        from ..config.mapping import config_from_mapping
-
         return cls(config_from_mapping(FSRConfig, params, "representation"))
 
     def __init__(self, config: FSRConfig = FSRConfig()):

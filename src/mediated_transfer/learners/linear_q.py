@@ -30,6 +30,7 @@ from typing import Any, Protocol
 import numpy as np
 from numba import njit
 
+from ..mapping import config_from_mapping
 from .rng_state import restore_rng_state, rng_state_words
 
 LEARNING_RATE_DECAYS = ("boyan", "boyan_const", "const")
@@ -131,8 +132,6 @@ class LinearQLearner:
     def from_params(cls, *, representation: Representation, num_actions: int, seed: int, world=None,
                     **params) -> "LinearQLearner":
         """``algorithm=linear_q``'s ``_target_``: the learner of the group's keys."""
-        from ..config.mapping import config_from_mapping
-
         return cls(config_from_mapping(LinearQConfig, params, "algorithm"), representation, num_actions, seed)
 
     def __init__(self, config: LinearQConfig, representation: Representation, num_actions: int = 11, seed: int = 0):

@@ -44,6 +44,7 @@ import numpy as np
 from numba import njit
 
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..mapping import config_from_mapping
 from ._distance_ranges import check_numbers_and_ranges, check_positive_int
 
 NUM_BINARY = len(PICKING_LOCATIONS)
@@ -100,8 +101,6 @@ class RBFRepresentation:
     @classmethod
     def from_params(cls, **params) -> "RBFRepresentation":
         """``representation``'s ``_target_``: the feature map of the group's keys."""
-        from ..config.mapping import config_from_mapping
-
         return cls(config_from_mapping(RBFConfig, params, "representation"))
 
     def __init__(self, config: RBFConfig = RBFConfig()):

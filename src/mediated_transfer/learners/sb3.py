@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..env.task import OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..mapping import config_from_mapping
 
 NUM_ACTIONS = len(PICKING_LOCATIONS) + 6  # 5 picks, 4 moves, 2 rotations
 
@@ -316,7 +317,6 @@ class SB3Learner:
     @classmethod
     def of(cls, algorithm: str, params, representation, world, seed: int, num_actions: int = NUM_ACTIONS,
            env=None) -> "SB3Learner":
-        from ..config.mapping import config_from_mapping
 
         config = config_from_mapping(CONFIGS[algorithm], params, "algorithm")
         return cls(algorithm, config, representation, world, seed, env=env, num_actions=num_actions)

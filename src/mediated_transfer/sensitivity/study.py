@@ -11,7 +11,7 @@ from omegaconf import DictConfig, OmegaConf
 from hydra.core.override_parser.overrides_parser import OverridesParser
 
 from ..config.compose import compose_config, prepare_overrides
-from ..config.mapping import config_from_mapping
+from ..mapping import config_from_mapping
 from ..env.config import WorldConfig
 from ..reporting.compose import variant_of
 from ..sweep import planned_jobs

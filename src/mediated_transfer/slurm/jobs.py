@@ -74,9 +74,9 @@ def group_runs(runs: Sequence[PlannedRun], runs_per_job: int) -> list[list[Plann
 
 
 def lockstep_groups_of(runs: Sequence[PlannedRun]) -> list[list[PlannedRun]] | None:
-    """The runs grouped for lockstep, one group per job (lockstep.launch.lockstep_groups);
+    """The runs grouped for lockstep, one group per job (sweep.groups.lockstep_groups);
     None when no group has more than one run (then runs_per_job packs them)."""
-    from ..lockstep.launch import lockstep_groups
+    from ..sweep.groups import lockstep_groups
 
     configs = {run.overrides: run.config for run in runs}
     groups = lockstep_groups([run.overrides for run in runs], lambda o: configs[tuple(o)], lambda cfg: False)

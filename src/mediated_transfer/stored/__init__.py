@@ -11,3 +11,7 @@ None of this is part of what a run computes, so none of it is in a result's code
 RESULT_FILE = "result.json"
 CURVE_FILE = "curve.csv"
 CURVE_HEADER = "step,mean_reward,success_rate"
+LINEAR_FILE = "learner.npz"
+DQN_FILE = "learner.pt"
+LEARNER_FILES = (LINEAR_FILE, DQN_FILE)
+"""A run's trained learner (saved_learner.py): a linear learner's arrays, a torch learner's state."""

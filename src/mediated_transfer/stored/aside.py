@@ -11,16 +11,14 @@ import os
 import time
 from pathlib import Path
 
-from . import CURVE_FILE, RESULT_FILE
+from . import CURVE_FILE, LEARNER_FILES, RESULT_FILE
 
 SUFFIX = ".damaged-"
 
 
 def run_files() -> tuple[str, ...]:
     """What a run leaves in its folder: its record, its curve, its saved learner."""
-    from ..saved_learner import FILES
-
-    return (RESULT_FILE, CURVE_FILE, *FILES)
+    return (RESULT_FILE, CURVE_FILE, *LEARNER_FILES)
 
 
 def set_aside(folder: str | Path) -> list[Path]:

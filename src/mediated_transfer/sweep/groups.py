@@ -16,7 +16,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.core.utils import JobReturn, JobStatus, run_job
 from omegaconf import DictConfig
 
-from ..sweep import _with_seed, _without_seed
+from . import _with_seed, _without_seed
 
 
 def group_size(cfg: DictConfig, cell_runs: int) -> int:
@@ -56,7 +56,7 @@ def run_group(jobs: Sequence[tuple[DictConfig, Any]]) -> list[JobReturn]:
     launcher builds them for ``hydra.core.utils.run_job``. Each job is set up by Hydra (folder,
     .hydra/, logging); their runs are then computed together. A failure fails the group's
     unfinished jobs, each with the error."""
-    from ..sweep.job import run_jobs
+    from .job import run_jobs
 
     returns, prepared = [], []
     for sweep_config, hydra_context in jobs:
