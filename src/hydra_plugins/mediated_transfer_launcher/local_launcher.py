@@ -110,6 +110,11 @@ class MediatedJoblibLauncher(JoblibLauncher):
         params = dict(self.joblib)
         params["backend"] = "loky"  # as Hydra's joblib launcher: threads are incompatible with Hydra
         process_joblib_cfg(params)
+        if len(groups) == 1:
+            # One job (or group): a pool would start a worker process for it, which imports
+            # everything and composes the config again (a skip of a finished run: most of its
+            # time); joblib runs a pool of one here, as Hydra's basic launcher would.
+            params["n_jobs"] = 1
         state = Singleton.get_state()
         if all(len(g) == 1 for g in groups):  # Hydra's joblib launcher, its lines included
             log.info("Joblib.Parallel(%s) is launching %d jobs", ",".join(f"{k}={v}" for k, v in params.items()),
