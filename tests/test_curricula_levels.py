@@ -16,7 +16,7 @@ from auto_curricula.plr_annulus import PLRAnnulus
 from auto_curricula.sfl import SamplingForLearnability
 from mediated_transfer import plugins
 from mediated_transfer.env import sample_tasks
-from mediated_transfer.run import _EVAL_TASK_STREAM, _stream_seed
+from mediated_transfer.recorder import _EVAL_TASK_STREAM, _stream_seed
 from mediated_transfer.transfer import StrategyContext
 from mediated_transfer.transfer.strategy import Strategy
 

@@ -16,7 +16,8 @@ from mediated_transfer.env import WorldConfig, sample_tasks
 from mediated_transfer.env.mediated_env import MediatedInteractionEnv
 from mediated_transfer.learners.factory import make_learner
 from mediated_transfer.results import CURVE_FILE, RESULT_FILE, RunResult
-from mediated_transfer.run import RunSpec, evaluate, execute_run
+from mediated_transfer.recorder import evaluate
+from mediated_transfer.run import RunSpec, execute_run
 
 TINY = dict(budget=600, eval_points=3, eval_episodes=3, source_pool_size=200)
 

@@ -3,7 +3,7 @@
     python -m mediated_transfer.evaluate --run multirun/table2_rbf/paper/regular_50/seed=3
     python -m mediated_transfer.evaluate --run <folder> --episodes 1000 --seed 100
 
-The evaluation is the run's own (run.evaluate: greedy policy, the run's world and action
+The evaluation is the run's own (recorder.evaluate: greedy policy, the run's world and action
 noise). Tasks and noise come from ``--seed`` as a run derives them from its seed, so the
 defaults (the run's seed and its number of evaluation episodes) repeat the run's last
 evaluation point exactly; another seed gives tasks the run was never evaluated on.

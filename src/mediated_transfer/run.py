@@ -19,8 +19,6 @@ from .recorder import EvaluationFn, FinishFn, ProgressFn, RunStreams
 from .results import RunResult
 from .runspec import MAX_SOURCE_POOL, MAX_STEPS, RunSpec  # noqa: F401 - where most callers import them
 
-# Re-exported: what evaluate.py and tests read from here (recorder.py holds them).
-from .recorder import _EVAL_NOISE_STREAM, _EVAL_TASK_STREAM, _stream_seed, evaluate  # noqa: E402,F401
 
 def execute_run(spec: RunSpec, progress: ProgressFn | None = None, progress_every: int = 0,
                 on_evaluation: EvaluationFn | None = None,
