@@ -207,3 +207,35 @@ def test_the_versions_of_the_libraries_a_run_computes_with_are_read_without_impo
 
     assert out == [numpy.__version__, pymunk.version, platform.python_version(), "False"]
     assert set(library_versions()) == {"python", *LIBRARIES}
+
+
+def test_a_digest_is_remembered_between_processes_while_its_files_are_unchanged(tmp_path, monkeypatch):
+    """provenance/digest_cache.py: an entry is read back instead of walking the closure again,
+    and any listed file with another modification time (or gone) makes it unusable."""
+    import os
+
+    from mediated_transfer import provenance
+    from mediated_transfer.provenance import digest_cache
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    spec = RunSpec(representation="fsr", strategy="regular", n_source=15)
+    digest = run_digest(spec)
+    [entry] = (tmp_path / "mediated-transfer" / "digests").glob("*.json")
+    files = json.loads(entry.read_text())["files"]
+    loop = str(Path(provenance.__file__).parents[1] / "lockstep" / "run.py")
+    assert loop in files  # the one run loop computes it
+
+    def walked(*args):  # a remembered digest does not walk the closure
+        raise AssertionError("closure walked")
+
+    monkeypatch.setattr(provenance, "_digest", walked)
+    assert run_digest(spec) == digest
+    stat = os.stat(loop)
+    try:
+        os.utime(loop, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1))
+        assert digest_cache.read(entry.stem) is None  # a file changed: computed again
+    finally:
+        os.utime(loop, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert digest_cache.read(entry.stem) == digest
+    monkeypatch.setenv(digest_cache.SWITCH, "off")
+    assert digest_cache.read(entry.stem) is None

@@ -628,3 +628,31 @@ def test_two_users_of_one_group_share_a_sweep_and_its_store():
         assert all(r.info.status == "FINISHED" for r in runs)
     finally:
         shutil.rmtree(shared, ignore_errors=True)
+
+
+def test_a_finished_and_logged_sweep_is_answered_without_launching_it(root, source_cache, capsys):
+    """Run again, a sweep whose every run is finished and in MLflow prints its runs' lines from
+    the stored results (sweep/answered.py): Hydra launches nothing, MLflow is only read."""
+    args = ["-m", "experiment=table2_rbf", "cell=none_0", *_common(root, source_cache)]
+    _run_cli(*args, "hydra/launcher=basic")
+    sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
+    launched = (sweep_dir / "multirun.yaml").stat().st_mtime_ns
+    settings = _settings(root)
+    logged = sorted(r.info.run_id for r in tracking.find_runs(settings, "table2_rbf"))
+    assert len(logged) == SEEDS
+
+    capsys.readouterr()
+    _run_cli(*args)
+    lines = re.findall(r"(\[table2_rbf/smoke .*, found, skipped)$", capsys.readouterr().out, re.MULTILINE)
+    assert lines == [f"[table2_rbf/smoke {SEEDS}/{SEEDS}] none_0 seed={s}: L_R="
+                     f"{RunResult.read(sweep_dir / 'none_0' / f'seed={s}').reward_loss:.2f}, found, skipped"
+                     for s in range(SEEDS)]
+    assert (sweep_dir / "multirun.yaml").stat().st_mtime_ns == launched  # Hydra did not launch
+    assert sorted(r.info.run_id for r in tracking.find_runs(settings, "table2_rbf")) == logged
+
+    # A run missing from MLflow is not answered for: the sweep's job logs it again.
+    settings.client().delete_run(logged[0])
+    _run_cli(*args)
+    assert (sweep_dir / "multirun.yaml").stat().st_mtime_ns != launched
+    again = tracking.find_runs(settings, "table2_rbf")
+    assert len(again) == SEEDS and all(r.info.status == "FINISHED" for r in again)

@@ -79,7 +79,10 @@ def _cli(args: list[str], parsed, runs: list) -> Any:
         informational = (parsed.help or parsed.hydra_help or parsed.cfg or parsed.info
                          or parsed.shell_completion)
         if not informational:
-            runs += preflight(parsed.overrides, multirun=parsed.multirun)
+            prepared_runs = preflight(parsed.overrides, multirun=parsed.multirun)
+            runs += prepared_runs.runs
+            if prepared_runs.answered:  # every run finished and logged: nothing to launch
+                return None
     except ConfigError as error:
         raise SystemExit(f"Invalid configuration: {error}") from None
     except Exception as error:  # noqa: BLE001 - store, cache or plan: stop, in one line

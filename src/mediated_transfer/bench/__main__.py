@@ -6,6 +6,7 @@ Ratios, not absolute times, are the targets (they survive a slower or busier mac
   dqn:    our DQN learning steps/s / Stable-Baselines3 DQN steps/s       (aim >= 5)
   lockstep: a tuned DQN step's breakdown; steps/s per network of K runs stepped together
           (CPU group, stacked networks) / single runs                      (aim >= 3)
+  startup: a finished sweep run again (a skip), seconds and / computing it  (aim < 1.5 s)
 """
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ PARTS = {
     "dqn": "mediated_transfer.bench.dqn_speed",
     "lockstep": "mediated_transfer.bench.lockstep_speed",
     "projection": "mediated_transfer.bench.projection",
+    "startup": "mediated_transfer.bench.startup_speed",
 }
-DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 2_000, "projection": None}
+DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 2_000, "projection": None, "startup": 5}
 
 
 def main(argv: list[str] | None = None) -> int:

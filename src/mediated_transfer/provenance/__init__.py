@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..results import RESULTS_FORMAT  # noqa: F401 - read here by staleness and its callers
+from . import digest_cache
 from .closure import PROJECT, closure_digest
 
 if TYPE_CHECKING:
@@ -69,7 +70,15 @@ def run_kind(spec: "RunSpec", lockstep: bool = False) -> str:
 
 
 def run_digest(spec: "RunSpec", lockstep: bool = False) -> str:
-    return _digest(tuple(_path(r) for r in run_roots(spec, lockstep)), tuple(run_roots(spec, lockstep)))
+    """The digest of the code that computes ``spec`` (remembered between processes while its
+    files are unchanged: digest_cache.py)."""
+    entry = digest_cache.key(spec, lockstep, SCHEME, library_versions())
+    digest = digest_cache.read(entry)
+    if digest is None:
+        roots = run_roots(spec, lockstep)
+        digest = _digest(tuple(_path(r) for r in roots), tuple(roots))
+        digest_cache.write(entry, digest, {PROJECT} | {_top(r) for r in roots})
+    return digest
 
 
 @functools.lru_cache(maxsize=256)

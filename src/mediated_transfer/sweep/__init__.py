@@ -17,14 +17,11 @@ entry point settles if the command is stopped (``interrupted``).
 
 from __future__ import annotations
 
-import hashlib
 import itertools
-import json
 import logging
-import time
 from collections import OrderedDict
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -32,11 +29,12 @@ from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from ..atomic import atomic_write_text
 from ..config.compose import ConfigError, compose_config, prepare_overrides
 from ..config.spec import run_spec
 from ..provenance.judge import judge
+from . import answered
 from .identity import run_where
+from .progress import PLAN_PREFIX, write_plan  # noqa: F401 - the plans' writer, for the launchers and tests
 
 if TYPE_CHECKING:
     from ..run import RunSpec
@@ -44,13 +42,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("mediated_transfer")
 
-PLAN_PREFIX = ".sweep_plan."
-"""Plans are written into the sweep folder before the jobs start: which runs a launch has."""
-
-
-def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
+def preflight(overrides: Sequence[str], multirun: bool) -> "Prepared":
     """Check the command's config(s) and prepare a sweep; ConfigError (one line) if anything is
-    wrong. Returns the command's runs (one for a single run)."""
+    wrong. Returns the command's runs (one for a single run), answered if every run of a sweep
+    is finished and logged already."""
     overrides = prepare_overrides(overrides)  # also refuses an override Hydra cannot parse
     parsed = OverridesParser.create().parse_overrides(list(overrides))
     fixed = [o.input_line for o in parsed if not o.is_sweep_override()]
@@ -61,17 +56,19 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
             raise ConfigError(f"{' '.join(swept)} sweeps over values: add -m (--multirun)")
         _try_plugins(run_spec(base))
         _prepare_tracking(base)  # a store that cannot be reached stops the run now, in one line
-        return [_planned(base, Path(base.hydra.run.dir), base)]
+        return Prepared([_planned(base, Path(base.hydra.run.dir), base)])
     # Hydra's own overrides (launcher, ...) are not part of a job's config.
     jobs = planned_jobs(base, [o for o in overrides if not _is_hydra_override(o)])
     distinct = sorted({_without_seed(job) for job in jobs})
     # Where a user's plugins live counts for every job (hydra.searchpath is Hydra's own key).
     searchpath = [o for o in overrides if o.lstrip("+").startswith("hydra.searchpath")]
-    configs = {job: compose_config(list(job) + searchpath, hydra=True) for job in distinct}
+    # A job whose overrides are the command's own (no sweep besides seeds) is the base config.
+    configs = {job: base if set(job) | set(searchpath) == set(fixed) else
+               compose_config(list(job) + searchpath, hydra=True) for job in distinct}
     specs = {job: run_spec(cfg) for job, cfg in configs.items()}
     plans: dict[Path, list[str]] = {}
     recompute: dict[Path, list[str]] = {}
-    planned = []
+    planned, found = [], []
     for job in jobs:
         cfg = _with_seed(configs[_without_seed(job)], job)
         sweep_dir, run = Path(cfg.hydra.sweep.dir), str(cfg.hydra.sweep.subdir).rstrip("/")
@@ -80,20 +77,39 @@ def preflight(overrides: Sequence[str], multirun: bool) -> list[PlannedRun]:
         # set aside by its job (under the run's claim: another launch may be writing it right
         # now), saying why; like a stale run recomputed, it is not finished till then.
         folder = sweep_dir / run
-        verdict = judge(folder, replace(specs[_without_seed(job)], seed=int(cfg.seed)),
-                        rerun_stale=bool(cfg.rerun_stale))
+        spec = replace(specs[_without_seed(job)], seed=int(cfg.seed))
+        verdict = judge(folder, spec, rerun_stale=bool(cfg.rerun_stale))
         if verdict.found and not verdict.kept:
             recompute.setdefault(sweep_dir, []).append(run)
         plans.setdefault(sweep_dir, []).append(run)
         planned.append(_planned(cfg, folder, base))
+        found.append(answered.Found(cfg, spec, folder, str(cfg.hydra.job.override_dirname), verdict))
+    with answered.answerable(base, found) as finished:
+        if finished:
+            _write_plans(base, plans, recompute)
+            answered.answer(found)
+            return Prepared(planned, answered=True)
     _prepare_tracking(base)
     _warm_source_task_cache(list(specs.values()))
     for spec in specs.values():
         _try_plugins(spec)
+    _write_plans(base, plans, recompute)
+    return Prepared(planned)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A checked command: its runs, and whether preflight answered it (every run finished and
+    logged: sweep/answered.py), so that nothing is left to launch."""
+
+    runs: list["PlannedRun"]
+    answered: bool = False
+
+
+def _write_plans(base: DictConfig, plans: dict[Path, list[str]], recompute: dict[Path, list[str]]) -> None:
     for sweep_dir, runs in plans.items():
         write_plan(sweep_dir, runs, recompute.get(sweep_dir, []))
         log.info("sweep %s: %d runs in %s", base.name, len(runs), sweep_dir)
-    return planned
 
 
 def _planned(cfg: DictConfig, folder: Path, command: DictConfig) -> "PlannedRun":
@@ -105,19 +121,6 @@ def _planned(cfg: DictConfig, folder: Path, command: DictConfig) -> "PlannedRun"
     elsewhere = "slurm" in str(OmegaConf.select(command, "hydra.launcher._target_", default="")).lower()
     settings = TrackingSettings.from_config(cfg.tracking) if cfg.tracking.enabled and not elsewhere else None
     return PlannedRun(folder, run_where(cfg.paths.root, folder), str(cfg.name), settings)
-
-
-def write_plan(sweep_dir: Path, runs: list[str], recompute: Sequence[str] = ()) -> Path:
-    """The plan of one launch into one sweep folder: its runs' folders, those of them whose
-    stale results it recomputes (their old result files do not count as finished), and when
-    it started. Named after its runs, so sweeps that share the folder (a baseline and a
-    variant) keep their own plans."""
-    sweep_dir.mkdir(parents=True, exist_ok=True)
-    name = hashlib.sha256("\n".join(runs).encode()).hexdigest()[:12]
-    path = sweep_dir / f"{PLAN_PREFIX}{name}.json"
-    plan = {"total": len(runs), "started": time.time(), "runs": runs, "recompute": list(recompute)}
-    atomic_write_text(path, json.dumps(plan) + "\n")
-    return path
 
 
 def _without_seed(job: Sequence[str]) -> tuple[str, ...]:

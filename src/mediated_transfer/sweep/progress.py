@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import math
@@ -9,13 +10,29 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from . import PLAN_PREFIX
+from ..atomic import atomic_write_text
 
 if TYPE_CHECKING:
     from ..results import RunResult
     from ..run import RunSpec
 
 log = logging.getLogger("mediated_transfer")
+
+PLAN_PREFIX = ".sweep_plan."
+"""Plans are written into the sweep folder before the jobs start: which runs a launch has."""
+
+
+def write_plan(sweep_dir: Path, runs: list[str], recompute: Sequence[str] = ()) -> Path:
+    """The plan of one launch into one sweep folder: its runs' folders, those of them whose
+    stale results it recomputes (their old result files do not count as finished), and when
+    it started. Named after its runs, so sweeps that share the folder (a baseline and a
+    variant) keep their own plans."""
+    sweep_dir.mkdir(parents=True, exist_ok=True)
+    name = hashlib.sha256("\n".join(runs).encode()).hexdigest()[:12]
+    path = sweep_dir / f"{PLAN_PREFIX}{name}.json"
+    plan = {"total": len(runs), "started": time.time(), "runs": runs, "recompute": list(recompute)}
+    atomic_write_text(path, json.dumps(plan) + "\n")
+    return path
 
 
 class SingleRunProgress:
