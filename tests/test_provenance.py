@@ -17,7 +17,7 @@ import pytest
 
 from mediated_transfer.provenance import (LIBRARIES, RESULTS_FORMAT, library_versions, run_digest, run_kind,
                                           staleness, translate)
-from mediated_transfer.provenance.certify import builtin_kinds, digests_now
+from mediated_transfer.provenance.standing import builtin_kinds, digests_now
 from mediated_transfer.provenance.closure import closure_digest
 from mediated_transfer.run import RunSpec
 
@@ -106,7 +106,7 @@ def _digests_of_edited_copy(root, edits: dict[str, tuple[str | None, str]], move
         text = file.read_text()
         assert old in text, (path, old)
         file.write_text(text.replace(old, new))
-    script = ("import json, sys; from mediated_transfer.provenance.certify import digests_now; "
+    script = ("import json, sys; from mediated_transfer.provenance.standing import digests_now; "
               "print(json.dumps(digests_now(json.loads(sys.argv[1]))))")
     out = subprocess.run([sys.executable, "-c", script, json.dumps(kinds)], capture_output=True, text=True,
                          env={"PYTHONPATH": str(root / "src"), "PATH": "/usr/bin:/bin"}, cwd=root)

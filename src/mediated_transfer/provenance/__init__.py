@@ -12,8 +12,8 @@ Results recorded before this scheme (a digest of whole files), or before a refac
 shown to compute the same curves, stay current through ``translations.json``: each step maps
 the digests of one commit to those of a later one, per run kind, and says why they compute the
 same. carry_over.py writes a step when each moved kind's standing short run reproduced its
-committed fingerprint (standing.py, fingerprints.json); certify.py one from a commit before
-fingerprints existed. The digest covers this project's and its plugins' code only: another
+committed fingerprint (standing.py, fingerprints.json); the steps before fingerprints existed
+were written from reruns by hand (docs/reliability.md lists their evidence). The digest covers this project's and its plugins' code only: another
 numpy, torch or pymunk version, or another Python, is not seen by it; the versions a run
 computed with are recorded beside it (``versions``), for people comparing runs across machines.
 
@@ -153,7 +153,7 @@ def _translations() -> list[dict]:
 
 def append_translation(step: dict) -> None:
     """Append ``step`` ({"why", "from_commit", "to_commit", "to_scheme", "map": {kind: {old:
-    new}}}) to translations.json: the one writer of that file (certify.py, carry_over.py)."""
+    new}}}) to translations.json: the one writer of that file (for carry_over.py)."""
     from ..atomic import atomic_write_text
 
     steps = list(_translations()) + [step]

@@ -9,7 +9,7 @@ the kind executes changed), it runs the kind's standing short run (standing.py) 
 fingerprint with the recorded one:
 
 - the same: the new code computes bit for bit what the old computed. One step of
-  translations.json (the format certify.py writes) maps each such kind's old digest to today's,
+  translations.json maps each such kind's old digest to today's,
   so results of the old code read current, and fingerprints.json records today's digest.
 - another: nothing is written for that kind, and the command exits 1 naming it. If the change of
   behaviour is meant, ``--accept "WHY"`` records the new fingerprint instead (with WHY): results

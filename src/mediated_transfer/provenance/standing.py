@@ -114,13 +114,44 @@ class Kind:
         return run_digest(self.spec(), self.lockstep)
 
 
+def builtin_kinds() -> list[str]:
+    """Every run kind of the built-in options: algorithm/representation/strategy[/lockstep]."""
+    from ..config.targets import builtin_target
+    from ..learners.factory import ALGORITHMS, learner_target
+    from ..plugins import owner_class
+
+    found = []
+    for algorithm in ALGORITHMS:
+        cls = owner_class(learner_target(algorithm))
+        own_loop = getattr(cls, "run_loop", None) is not None
+        for representation in cls.representations:
+            builtin_target("representation", representation)  # exists
+            for strategy in ("none", "regular", "scaffolded"):
+                found.append(f"{algorithm}/{representation}/{strategy}")
+                if not own_loop:
+                    found.append(f"{algorithm}/{representation}/{strategy}/lockstep")
+    return found
+
+
+def digests_now(keys: list[str]) -> dict[str, str]:
+    """Today's code digest of each kind (``algorithm/representation/strategy[=target][/lockstep]``)."""
+    from ..runspec import RunSpec
+
+    out = {}
+    for key in keys:
+        a, r, s, *lock = key.split("/")
+        s, _, target = s.partition("=")
+        out[key] = run_digest(RunSpec(algorithm=a, representation=r, strategy=s, n_source=0 if s == "none" else 1,
+                                      strategy_target=target or None), bool(lock))
+    return out
+
+
 @functools.cache
 def kinds() -> dict[str, Kind]:
-    """Every kind with a standing run, by key: the built-in options' (certify.builtin_kinds) and
+    """Every kind with a standing run, by key: the built-in options' (builtin_kinds) and
     the plugin strategies' with every learner of the project's loop (read once per process)."""
     from ..learners.factory import ALGORITHMS, learner_target
     from ..plugins import owner_class
-    from .certify import builtin_kinds
 
     found = [Kind(*_split(key)) for key in builtin_kinds()]
     for algorithm in ALGORITHMS:
