@@ -275,7 +275,8 @@ def searchpath_conf(words: list[str], plugins: bool) -> list[Path]:
                 folders.append(ROOT / where)
                 continue
             # as the config loader finds it; the worked examples are a package the reader installs
-            folders.append(_source_dir("pkg", where) or ROOT / "examples" / "plugins" / where.replace(".", "/"))
+            examples = [ROOT / "examples" / kind / where.replace(".", "/") for kind in ("plugins", "worlds")]
+            folders.append(_source_dir("pkg", where) or next((f for f in examples if f.is_dir()), examples[0]))
     return folders
 
 

@@ -9,8 +9,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from mediated_transfer.env.paper import PaperWorld
+
 from mediated_transfer import recorder as recorder_module
-from mediated_transfer.lockstep import run as lockstep_module
 from mediated_transfer.config.spec import spec_from_dict
 from mediated_transfer.env import WorldConfig, sample_tasks
 from mediated_transfer.env.mediated_env import MediatedInteractionEnv
@@ -138,8 +139,7 @@ def test_bad_input_fails_before_any_work(monkeypatch, changes, message):
         raise AssertionError("work started before the input was checked")
 
     monkeypatch.setattr(recorder_module, "source_task_set", no_work)
-    monkeypatch.setattr(recorder_module, "MediatedInteractionEnv", no_work)
-    monkeypatch.setattr(lockstep_module, "MediatedInteractionEnv", no_work)
+    monkeypatch.setattr(PaperWorld, "make_env", no_work)  # every loop makes its environments here
     spec = replace(RunSpec(**TINY), **changes)
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
         execute_run(spec)

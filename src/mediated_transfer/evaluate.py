@@ -32,17 +32,15 @@ class Evaluation:
 def evaluate_saved(folder: str, episodes: int | None = None,
                    seed: int | None = None) -> tuple[Evaluation, str]:
     """Evaluate the learner saved in ``folder``; return the result and the run's description."""
-    from .env import sample_tasks
-    from .env.mediated_env import MediatedInteractionEnv
     from .recorder import _EVAL_NOISE_STREAM, _EVAL_TASK_STREAM, _stream_seed, evaluate
 
     learner, spec = load_learner(folder)
     episodes = spec.eval_episodes if episodes is None else episodes
     seed = spec.seed if seed is None else seed
     # The run's streams (run.execute_run): the same seed gives the same tasks and noise.
-    tasks = sample_tasks("target", episodes,
-                         np.random.default_rng(_stream_seed(seed, _EVAL_TASK_STREAM)), spec.world)
-    env = MediatedInteractionEnv("target", spec.world)
+    world = spec.make_world()
+    tasks = world.sample_tasks("target", episodes, np.random.default_rng(_stream_seed(seed, _EVAL_TASK_STREAM)))
+    env = world.make_env("target")
     reward, success = evaluate(learner, env, tasks, _stream_seed(seed, _EVAL_NOISE_STREAM))
     return Evaluation(reward, success, episodes, seed), spec.describe()
 

@@ -27,8 +27,6 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 
 from . import metrics, plugins
-from .env import sample_tasks
-from .env.mediated_env import MediatedInteractionEnv
 from .learners.base import Learner
 from .results import RESULTS_FORMAT, RunResult
 from .transfer.choices import EpisodeChoices
@@ -53,7 +51,7 @@ def _stream_seed(seed: int, stream: int) -> int:
     return int(np.random.SeedSequence([seed, stream]).generate_state(1)[0])
 
 
-def evaluate(learner: Learner, env: MediatedInteractionEnv, tasks, seed: int) -> tuple[float, float]:
+def evaluate(learner: Learner, env, tasks, seed: int) -> tuple[float, float]:
     """<R> and success rate of the greedy policy on ``tasks``; the learner is left unchanged."""
     total, successes = 0.0, 0
     for i, task in enumerate(tasks):
@@ -92,8 +90,8 @@ class RunStreams:
             build_source_tasks=lambda: source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
                                                        seed=spec.source_set_seed, cache_dir=spec.cache_dir))
         strategy = plugins.call(spec.strategy_class(), spec.strategy_params, context=context)
-        eval_tasks = sample_tasks("target", spec.eval_episodes,
-                                  np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)), world)
+        eval_tasks = spec.make_world().sample_tasks(
+            "target", spec.eval_episodes, np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)))
         return cls(_stream_seed(spec.seed, _LEARNER_STREAM), _stream_seed(spec.seed, _ENV_STREAM),
                    strategy, eval_tasks, _stream_seed(spec.seed, _EVAL_NOISE_STREAM))
 
@@ -104,7 +102,7 @@ class Curve:
 
     def __init__(self, spec: "RunSpec", streams: RunStreams, on_evaluation: EvaluationFn | None = None):
         self.every = spec.budget // spec.eval_points
-        self.env = MediatedInteractionEnv("target", spec.world)
+        self.env = spec.make_world().make_env("target")
         self.tasks, self.seed, self.on_evaluation = streams.eval_tasks, streams.eval_seed, on_evaluation
         self.steps: list[int] = []
         self.rewards: list[float] = []
@@ -157,7 +155,8 @@ class RunRecorder:
         """The strategy asks for each episode's mean absolute TD error: the loop passes each
         transition's ``td_error`` (taken before the learner observes it) to ``step``."""
         self.curve = Curve(spec, self.streams, on_evaluation)
-        self.choices = EpisodeChoices(self.curve.every, spec.eval_points, spec.world.mediated_min_distance)
+        self.choices = EpisodeChoices(self.curve.every, spec.eval_points,
+                                      spec.make_world().task_space.target_distances[0])
         self.progress, self.progress_every = progress, progress_every or self.curve.every
         self.check_first = check_before_evaluating
         self.steps = 0
@@ -175,8 +174,7 @@ class RunRecorder:
         return self.steps >= self.spec.budget or self.curve.failure is not None
 
     def begin(self, env) -> tuple:
-        """Start an episode on ``env`` (a target-scenario MediatedInteractionEnv, possibly
-        wrapped): the strategy's next task, or a target task. Returns (observation, info)."""
+        """Start an episode on ``env`` (a target-scenario environment of the run's world): the strategy's next task, or a target task. Returns (observation, info)."""
         observation, info, self._task = start_episode(env, self.strategy, self._env_seed)
         self._env, self._env_seed, self.in_episode = env, None, True
         self._start, self._return, self._length, self._td = self.steps, 0.0, 0, 0.0

@@ -18,7 +18,6 @@ import gymnasium
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from .env.mediated_env import MediatedInteractionEnv
 from .learners.factory import make_features
 from .learners.sb3 import SB3Learner
 from .recorder import EvaluationFn, FinishFn, ProgressFn, RunRecorder
@@ -31,10 +30,12 @@ def execute_sb3_run(spec, progress: ProgressFn | None = None, progress_every: in
     """run.execute_run for an SB3 learner (it calls this one; ``spec`` is validated)."""
     # A diverged SB3 policy cannot act (non-finite logits): check before evaluating.
     record = RunRecorder(spec, None, progress, progress_every, on_evaluation, check_before_evaluating=True)
-    env = DummyVecEnv([lambda: _RecordedEpisodes(MediatedInteractionEnv("target", spec.world), record)])
-    features = make_features(spec.representation, spec.representation_params, spec.representation_target)
-    learner = SB3Learner.of(spec.algorithm, spec.algorithm_params, features, spec.world,
-                            record.streams.learner_seed, env=env)
+    world = spec.make_world()
+    env = DummyVecEnv([lambda: _RecordedEpisodes(world.make_env("target"), record)])
+    features = make_features(spec.representation, spec.representation_params, spec.representation_target,
+                             world.sensors)
+    learner = SB3Learner.of(spec.algorithm, spec.algorithm_params, features, world,
+                            record.streams.learner_seed, env=env, num_actions=world.num_actions)
     try:
         learner.model.learn(total_timesteps=spec.budget, callback=_RunCallback(record, learner))
     except ValueError:
@@ -50,7 +51,7 @@ class _RecordedEpisodes(gymnasium.Wrapper):
     """The training environment as the recorder runs its episodes (what TransferWrapper does for
     any Gymnasium learner, here through the run's recorder)."""
 
-    def __init__(self, env: MediatedInteractionEnv, record: RunRecorder):
+    def __init__(self, env: gymnasium.Env, record: RunRecorder):
         super().__init__(env)
         self.record = record
 

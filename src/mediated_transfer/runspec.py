@@ -13,7 +13,6 @@ import numpy as np
 from . import metrics, plugins
 from .config.finite import check_finite
 from .env import WorldConfig
-from .env.task import check_room
 from .learners.factory import check_learner, learner_target
 from .learners.factory import own_run_loop as learner_run_loop
 from .transfer.strategy import METHODS, SOURCE_TASKS
@@ -58,6 +57,7 @@ class RunSpec:
     cache_dir: str | None = None
     """Where clustered source task sets are cached (None: no cache)."""
     world: WorldConfig = field(default_factory=WorldConfig)
+    """The world's config: the fields of its ``config_class`` (env/door.py), the ``env`` keys."""
     algorithm_params: dict[str, Any] = field(default_factory=dict)
     representation_params: dict[str, Any] = field(default_factory=dict)
     strategy_params: dict[str, Any] = field(default_factory=dict)
@@ -67,9 +67,12 @@ class RunSpec:
     option of that name (results recorded before options carried their target)."""
     representation_target: str | None = None
     strategy_target: str | None = None
+    world_target: str | None = None
+    """Dotted path of the world class (the ``env`` option's ``_target_``); None: the paper's."""
 
     def validate(self) -> "RunSpec":
         """Raise a clear error for bad input before any work starts."""
+        world = self.make_world()  # the world's class and keys first: the checks below read it
         check_finite((("algorithm", self.algorithm, self.algorithm_params),
                       ("representation", self.representation, self.representation_params),
                       ("strategy", self.strategy, self.strategy_params),
@@ -121,8 +124,19 @@ class RunSpec:
         self._check_work()
         # Sizes that leave no room for a task would make task sampling loop (almost) forever.
         for scenario in ("target", "source") if self.n_source else ("target",):
-            check_room(scenario, self.world)
+            world.check_room(scenario)
         return self
+
+    def make_world(self):
+        """The run's world (env/door.py): what its loops, evaluation and animation make
+        environments, tasks and sensor layouts from."""
+        from .env.door import build_world, world_class
+
+        config_class = world_class(self.world_target).config_class
+        if not isinstance(self.world, config_class):
+            raise ValueError(f"env: {type(self.world).__name__} is not the config of "
+                             f"{self.world_target or 'the paper world'} ({config_class.__name__})")
+        return build_world(self.world_target, self.world)
 
     def strategy_class(self):
         """What builds the strategy: its ``_target_`` (or the built-in's of its name)."""

@@ -112,7 +112,7 @@ def load_learner(folder: str | os.PathLike) -> tuple["Learner", "RunSpec"]:
         spec = spec_from_dict(meta["spec"])
         # The learner's generator state is restored from the file: the seed here does not matter.
         learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                               spec.representation_params, world=spec.world, seed=0)
+                               spec.representation_params, world=spec.make_world(), seed=0)
         learner.load_state_dict(state)  # type: ignore[attr-defined]
     except SavedLearnerError:
         raise

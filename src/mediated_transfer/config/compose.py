@@ -217,8 +217,12 @@ def _unknown_keys(node: Any, path: str):
     if not isinstance(node, DictConfig):
         return
     kind = OmegaConf.get_type(node)
+    if path == "env." and node.get("_target_") not in (None, schema.WorldOption._target_):
+        kind = _world_schema(node) or kind  # a world of one's own: its own keys
     if dataclasses.is_dataclass(kind):
         allowed = [f.name for f in dataclasses.fields(kind)]
+        if path == "env.":
+            allowed.append("_target_")
         if not path:
             allowed.append("hydra")  # Hydra's own node, present when composed with it
         for key in node.keys():
@@ -228,3 +232,14 @@ def _unknown_keys(node: Any, path: str):
         if str(key) == "hydra" and not path:
             continue
         yield from _unknown_keys(node._get_node(key), f"{path}{key}.")
+
+
+def _world_schema(node: DictConfig) -> type | None:
+    """The config_class of the world an ``env`` node names: its keys are the node's allowed
+    ones (None if it cannot be imported: the run's checks then say so in one line)."""
+    from ..env.door import world_class
+
+    try:
+        return world_class(node.get("_target_")).config_class
+    except ValueError:
+        return None

@@ -101,8 +101,16 @@ class NetworkOption:
     """No feature map: the learner gets the sensor vector itself."""
 
 
+@dataclass(frozen=True)
+class WorldOption(WorldConfig):
+    """``env=default``: the paper's world (env/paper.py), built through the world door
+    (env/door.py) as a user's world is; conf/env/*.yaml extend it."""
+
+    _target_: str = "mediated_transfer.env.paper.PaperWorld"
+
+
 PYTHON_OPTIONS: dict[str, dict[str, type]] = {
-    "env": {"default": WorldConfig},
+    "env": {"default": WorldOption},
     "algorithm": {"linear_q": LinearQOption, "dqn": DQNOption, "sb3_ppo": SB3PPOOption,
                   "sb3_dqn": SB3DQNOption},
     "representation": {"rbf": RBFOption, "fsr": FSROption, "network": NetworkOption},
@@ -197,6 +205,11 @@ def _option_node(cls: type) -> DictConfig:
     # accept overrides, so the node is made writable. Its type still checks every value.
     node = OmegaConf.structured(cls)
     OmegaConf.set_readonly(node, False)
+    if issubclass(cls, WorldConfig):
+        # A world of one's own extends env=default with keys of its own (its config_class's):
+        # the node takes them, and compose.check_known_keys checks every key against the
+        # config_class of the node's _target_.
+        OmegaConf.set_struct(node, False)
     return node
 
 

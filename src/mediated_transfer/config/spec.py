@@ -23,6 +23,8 @@ def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
     algorithm, algorithm_target, algorithm_params = _option(cfg["algorithm"])
     representation, representation_target, representation_params = _option(cfg["representation"])
     strategy, strategy_target, strategy_params = _option(cfg["strategy"])
+    world = dict(_plain(cfg["env"]))
+    world_target = world.pop("_target_", None)  # None: a result recorded before worlds had one
     scale = cfg["scale"]
     return {
         "algorithm": algorithm,
@@ -41,7 +43,8 @@ def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
         "source_pool_size": cfg["source_pool_size"],
         "source_set_seed": cfg["source_set_seed"],
         "cache_dir": cfg["paths"]["cache_dir"],
-        "world": dict(_plain(cfg["env"])),
+        "world": world,
+        "world_target": world_target,
         "algorithm_params": algorithm_params,
         "representation_params": representation_params,
     }
@@ -50,16 +53,14 @@ def spec_values(cfg: Mapping[str, Any]) -> dict[str, Any]:
 def spec_from_dict(values: Mapping[str, Any]) -> "RunSpec":
     """A RunSpec from plain values (``spec_values``' or a saved learner's); unknown keys are errors."""
     # Imported here: the learners and the environment load only when a run is configured.
-    from ..env.config import WorldConfig
+    from ..env.door import world_config
     from ..runspec import RunSpec
 
     values = dict(values)
     world = values.pop("world", None)
     spec = config_from_mapping(RunSpec, values, "run")
-    if world is not None:
-        if not isinstance(world, WorldConfig):
-            world = config_from_mapping(WorldConfig, world, "env")
-        spec = replace(spec, world=world)
+    if world is not None:  # the config of the world its _target_ names (the door's)
+        spec = replace(spec, world=world_config(spec.world_target, world))
     return spec
 
 
@@ -131,7 +132,7 @@ def comparable(spec: "RunSpec") -> dict[str, Any]:
     moving a class leaves the run the same run). A strategy without parameters adds no key, so
     runs recorded before strategies had parameters keep their identity."""
     values = asdict(spec)
-    for key in ("cache_dir", "algorithm_target", "representation_target", "strategy_target"):
+    for key in ("cache_dir", "algorithm_target", "representation_target", "strategy_target", "world_target"):
         values.pop(key)
     if not values["strategy_params"]:
         values.pop("strategy_params")

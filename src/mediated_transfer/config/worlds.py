@@ -8,11 +8,8 @@ same worlds a run of ``env=<name>`` gets.
 
 from __future__ import annotations
 
-from omegaconf import OmegaConf
-
 from ..env.config import WorldConfig
-from .compose import CONF_DIR, compose_config
-from ..mapping import config_from_mapping
+from .compose import CONF_DIR
 
 
 def env_options() -> list[str]:
@@ -23,5 +20,6 @@ def env_options() -> list[str]:
 def named_world(option: str = "default") -> WorldConfig:
     """The world of ``env=<option>``, composed by Hydra as a run composes it; ConfigError (one
     line, listing the options) for an unknown name."""
-    cfg = compose_config([f"env={option}"])
-    return config_from_mapping(WorldConfig, OmegaConf.to_container(cfg.env, resolve=True), "env")
+    from ..env.door import world_of_option
+
+    return world_of_option(option).config

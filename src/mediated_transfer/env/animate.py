@@ -4,10 +4,13 @@
         --out reports/episode.gif --seed 1
     python -m mediated_transfer.env.animate --run <run folder> --seed 3 --out reports/trained.gif
     python -m mediated_transfer.env.animate --env tool_frame --seed 1 --out reports/tool_frame.gif
+    PYTHONPATH=examples/worlds python -m mediated_transfer.env.animate --env rake \
+        --out reports/rake.gif hydra.searchpath=[pkg://my_worlds.conf]
 
 A policy is a callable observation -> action; ``POLICIES`` maps each name to a factory
-``(env, seed) -> policy``. Add an entry to offer more. ``--run`` shows instead the greedy
-policy of a run's saved learner (saved_learner.py), in the run's world.
+``(world, env, seed) -> policy``. Add an entry to offer more. ``--run`` shows instead the
+greedy policy of a run's saved learner (saved_learner.py), in the run's world. ``--env`` takes
+any env option, a plugin's too (its search path as a trailing Hydra override, with env keys).
 """
 
 from __future__ import annotations
@@ -21,33 +24,36 @@ import numpy as np
 from PIL import Image
 
 from .config import WorldConfig
-from .mediated_env import ACTION_NAMES, NUM_ACTIONS, MediatedInteractionEnv
-from .scripted import ScriptedDirectPolicy, ScriptedToolPolicy
 from .task import SCENARIOS
 
 Policy = Callable[[np.ndarray], int]
 
 
-def _scripted(env: MediatedInteractionEnv, seed: int) -> Policy:
-    # The tool policy solves both scenarios (a target in reach is pushed directly).
-    return ScriptedToolPolicy(env) if env.scenario == "target" else ScriptedDirectPolicy(env)
+def _scripted(world, env, seed: int) -> Policy:
+    make = getattr(world, "scripted_policy", None)
+    if make is None:
+        raise ValueError(f"{type(world).__name__} has no scripted policy (scripted_policy); use --policy random")
+    return make(env, seed)
 
 
-def _random(env: MediatedInteractionEnv, seed: int) -> Policy:
+def _random(world, env, seed: int) -> Policy:
     rng = np.random.default_rng(seed)
-    return lambda observation: int(rng.integers(NUM_ACTIONS))
+    return lambda observation: int(rng.integers(world.num_actions))
 
 
-POLICIES: dict[str, Callable[[MediatedInteractionEnv, int], Policy]] = {
+POLICIES: dict[str, Callable[..., Policy]] = {
     "scripted": _scripted,
     "random": _random,
 }
 
 
 def record_episode(
-    env: MediatedInteractionEnv, policy: Policy, seed: int | None = None, options: dict | None = None
+    env, policy: Policy, seed: int | None = None, options: dict | None = None, action_names=None
 ) -> tuple[list[np.ndarray], dict]:
-    """Frames of one episode (the start and every step) and a summary of how it went."""
+    """Frames of one episode (the start and every step) and a summary of how it went
+    (``action_names``: the world's; None: the paper's)."""
+    if action_names is None:
+        from .mediated_env import ACTION_NAMES as action_names
     if env.render_mode != "rgb_array":
         raise ValueError('record_episode needs an environment made with render_mode="rgb_array"')
     observation, info = env.reset(seed=seed, options=options)
@@ -55,12 +61,12 @@ def record_episode(
     terminated = truncated = False
     while not (terminated or truncated):
         action = int(policy(observation))
-        actions.append(ACTION_NAMES[action])
+        actions.append(action_names[action])
         observation, reward, terminated, truncated, info = env.step(action)
         total += reward
         frames.append(env.render())
     return frames, {
-        "steps": env.elapsed_steps,
+        "steps": env.unwrapped.elapsed_steps,
         "return": total,
         "is_success": bool(info["is_success"]),
         "actions": actions,
@@ -95,9 +101,15 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--noise", type=float, default=None,
                         help="action noise (default: the config's, 0.1)")
     parser.add_argument("--fps", type=float, default=4.0)
+    parser.add_argument("overrides", nargs="*", metavar="KEY=VALUE",
+                        help="Hydra overrides of --env's world: hydra.searchpath=[pkg://<package>.conf], env.<key>=...")
     args = parser.parse_args(argv)
+    if args.overrides and args.env is None:
+        parser.error("overrides apply to --env's world: name one with --env")
 
-    config, label = WorldConfig(), args.policy or "scripted"
+    from .door import build_world
+
+    world, label = build_world(None, WorldConfig()), args.policy or "scripted"
     if args.run is not None:
         if args.policy is not None:
             parser.error("--run shows the run's learner: leave out --policy")
@@ -107,22 +119,26 @@ def main(argv: list[str] | None = None) -> dict:
             learned, spec = greedy_policy(args.run)
         except SavedLearnerError as error:
             raise SystemExit(f"Cannot animate: {error}") from None
-        config, label = spec.world, f"trained ({spec.describe()})"
+        world, label = spec.make_world(), f"trained ({spec.describe()})"
     if args.env is not None:
         if args.run is not None:
             parser.error("--run shows the run's learner in the run's world: leave out --env")
-        from ..config.compose import ConfigError
-        from ..config.worlds import named_world
+        from .door import world_of_option
 
         try:
-            config = named_world(args.env)
-        except ConfigError as error:
+            world = world_of_option(args.env, args.overrides)
+        except ValueError as error:  # ConfigError too: an unknown option or key, in one line
             raise SystemExit(f"Cannot animate: {error}") from None
+        if args.policy is None and getattr(world, "scripted_policy", None) is None:
+            label = "random"  # a world without a scripted policy: watch it act at random
     if args.noise is not None:
-        config = dataclasses.replace(config, action_noise=args.noise)
-    env = MediatedInteractionEnv(args.scenario, config, render_mode="rgb_array")
-    policy = learned if args.run is not None else POLICIES[label](env, args.seed)
-    frames, summary = record_episode(env, policy, seed=args.seed)
+        world = type(world)(dataclasses.replace(world.config, action_noise=args.noise))
+    env = world.make_env(args.scenario, render_mode="rgb_array")
+    try:
+        policy = learned if args.run is not None else POLICIES[label](world, env, args.seed)
+    except ValueError as error:
+        raise SystemExit(f"Cannot animate: {error}") from None
+    frames, summary = record_episode(env, policy, seed=args.seed, action_names=world.action_names)
     path = save_gif(frames, args.out, args.fps)
     outcome = "success" if summary["is_success"] else "no success"
     print(f"{path}: {label} policy on a {args.scenario} task, {outcome} "

@@ -166,5 +166,20 @@ class WorldConfig:
         angle = math.radians(self.tool_hook_angle)
         return self.tool_hook_length * math.cos(angle), self.tool_hook_length * math.sin(angle)
 
+    # --- the mediator's shape: a world with another tool overrides these two ---------------
+    @property
+    def tool_points(self) -> tuple[tuple[float, float], ...]:
+        """The tool's picking locations M1, M2, M3 in its body frame (the task's tool pose is
+        that frame's origin and angle): the L's handle end, corner and hook end. They must span
+        the tool (it lies in their convex hull): the range and wall checks test them alone."""
+        return (self.tool_handle_length, 0.0), (0.0, 0.0), self.hook_end
+
+    @property
+    def tool_segments(self) -> tuple[tuple[tuple[float, float], tuple[float, float], float], ...]:
+        """The tool's arms in its body frame, each (start, end, length), ``tool_width`` thick;
+        ``tool_mass`` is spread over them by length."""
+        return (((0.0, 0.0), (self.tool_handle_length, 0.0), self.tool_handle_length),
+                ((0.0, 0.0), self.hook_end, self.tool_hook_length))
+
     def to_dict(self) -> dict:
         return asdict(self)

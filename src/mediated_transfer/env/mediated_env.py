@@ -170,7 +170,14 @@ class MediatedInteractionEnv(gymnasium.Env):
         self._reward = float(config.success_reward)
         self._max_steps = config.max_episode_steps
         self._tool_limit = config.world_radius - config.tool_width / 2
-        self._lh, (self._hx, self._lk) = config.tool_handle_length, config.hook_end
+        self._points = (m1, m2, m3) = config.tool_points
+        self._lh, (self._hx, self._lk) = m1[0], m3
+        if m1[1] != 0.0 or m2 != (0.0, 0.0):
+            # Another mediator than an L with its corner at the body's origin (a world's
+            # config.tool_points): instance attributes over the methods, as for move_frame, so
+            # the paper's per-step path stays as it is.
+            self._sense = self._sense_any_tool
+            self._move_in_tool_frame = self._move_along_body_axes
         if config.move_frame == "tool":
             # An instance attribute over the method: the radial frame's step stays as it was.
             self._move_active = self._move_in_tool_frame
@@ -255,7 +262,7 @@ class MediatedInteractionEnv(gymnasium.Env):
             from .render import WorldRenderer  # PIL only when drawing
 
             self._renderer = WorldRenderer(self.config)
-        return self._renderer.draw(self.picking_locations, self._active, self._steps)
+        return self._renderer.draw(self.picking_locations, self._active, self._steps, self.tool_arms)
 
     def close(self) -> None:
         """Release the renderer. A closed environment refuses ``step`` and ``reset`` (one line)
@@ -279,13 +286,22 @@ class MediatedInteractionEnv(gymnasium.Env):
 
     @property
     def tool_position(self) -> np.ndarray:
-        """The tool's corner M2."""
-        return np.array(self._loc[2:4])
+        """The tool's pose origin: the L's corner M2 (config.tool_points' body frame)."""
+        return np.array((self._world.tool_x, self._world.tool_y))
 
     @property
     def tool_angle(self) -> float:
         """World angle of the handle, from M2 towards M1, in [-pi, pi)."""
         return (self._world.tool_angle + math.pi) % (2 * math.pi) - math.pi
+
+    @property
+    def tool_arms(self) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+        """The tool's arms (config.tool_segments) as (start, end) points in the world."""
+        from .task import _to_world
+
+        w = self._world
+        c, s, origin = math.cos(w.tool_angle), math.sin(w.tool_angle), (w.tool_x, w.tool_y)
+        return [(_to_world(a, origin, c, s), _to_world(b, origin, c, s)) for a, b, _ in self.config.tool_segments]
 
     @property
     def target_position(self) -> np.ndarray:
@@ -300,8 +316,8 @@ class MediatedInteractionEnv(gymnasium.Env):
     @property
     def current_task(self) -> Task:
         """The current poses as task-space coordinates."""
-        loc = self._loc
-        return Task((loc[6], loc[7]), (loc[2], loc[3]), self.tool_angle)
+        loc, w = self._loc, self._world
+        return Task((loc[6], loc[7]), (w.tool_x, w.tool_y), self.tool_angle)
 
     @property
     def elapsed_steps(self) -> int:
@@ -431,6 +447,37 @@ class MediatedInteractionEnv(gymnasium.Env):
             h(x3, y3),
         )
         self._success = h(tx, ty) <= self._goal
+
+    def _sense_any_tool(self) -> None:
+        """``_sense`` for any tool shape: its picking locations from config.tool_points."""
+        w, loc, h = self._world, self._loc, math.hypot
+        c, s = math.cos(w.tool_angle), math.sin(w.tool_angle)
+        x, y, tx, ty = w.tool_x, w.tool_y, w.target_x, w.target_y
+        for i, (px, py) in enumerate(self._points):
+            loc[2 * i], loc[2 * i + 1] = x + px * c - py * s, y + px * s + py * c
+        loc[6:8] = tx, ty
+        self._sensed[:NUM_DISTANCES] = (
+            *(h(loc[2 * i] - tx, loc[2 * i + 1] - ty) for i in range(3)),
+            *(h(loc[2 * i], loc[2 * i + 1]) for i in range(3)),
+        )
+        self._success = h(tx, ty) <= self._goal
+
+    def _move_along_body_axes(self, a: int, active: int) -> None:
+        """``move_frame="tool"`` for any tool shape: along its body frame's x axis (5/6) and y
+        axis (7/8), which for the paper's L are its handle and its hook."""
+        if active == T:
+            self._move_radially(a, active)
+            return
+        c, s = math.cos(self._world.tool_angle), math.sin(self._world.tool_angle)
+        ex, ey = c * self._move, s * self._move
+        dx, dy = {MOVE_OUT: (ex, ey), MOVE_IN: (-ex, -ey), MOVE_CCW: (-ey, ex), MOVE_CW: (ey, -ex)}[a]
+        loc, i = self._loc, 2 * active
+        if math.hypot(loc[i] + dx, loc[i + 1] + dy) > self._range:
+            self._world.idle()
+        elif all(math.hypot(loc[j] + dx, loc[j + 1] + dy) <= self._tool_limit for j in (0, 2, 4)):
+            self._world.translate_tool(dx, dy)
+        else:
+            self._world.idle()
 
     def _observation(self) -> np.ndarray:
         observation = self._sensed.copy()

@@ -66,9 +66,11 @@ class WorldRenderer:
             )
 
     def draw(
-        self, locations: np.ndarray, active: int, step: int | None = None
+        self, locations: np.ndarray, active: int, step: int | None = None, arms=None
     ) -> np.ndarray:
-        """One frame: ``locations`` are M1, M2, M3, T, O (5 x 2), ``active`` an index into them."""
+        """One frame: ``locations`` are M1, M2, M3, T, O (5 x 2), ``active`` an index into them;
+        ``arms`` the tool's segments as (start, end) world points (None: the L's, M2-M1 and
+        M2-M3)."""
         c = self.config
         image = Image.new("RGB", (self._px, self._px), WHITE)
         draw = ImageDraw.Draw(image)
@@ -92,11 +94,13 @@ class WorldRenderer:
 
         self._disc(draw, *target, c.target_radius, fill=TARGET, outline=OUTLINE,
                    width=_SUPERSAMPLE)
-        # The L: handle M2-M1 and hook M2-M3 as thick lines with round ends.
+        # The tool's arms (the L: handle M2-M1 and hook M2-M3) as thick lines with round ends.
         width = max(1, round(c.tool_width * self._scale))
-        for end in (tool[0], tool[2]):
-            draw.line((*self._xy(*tool[1]), *self._xy(*end)), fill=TOOL, width=width)
-        for p in tool:
+        if arms is None:
+            arms = [(tool[1], tool[0]), (tool[1], tool[2])]
+        for start, end in arms:
+            draw.line((*self._xy(*start), *self._xy(*end)), fill=TOOL, width=width)
+        for p in {tuple(map(float, point)) for arm in arms for point in arm}:
             self._disc(draw, *p, c.tool_width / 2, fill=TOOL)
 
         for i, p in enumerate(locations):

@@ -52,13 +52,21 @@ def sensor_vector(
 # 2-vectors made that slower than a hundred environment steps.
 def _tool_points(tool_position, tool_angle: float, config: WorldConfig):
     """M1, M2, M3 as (x, y) tuples (see tool_picking_locations)."""
-    cx, cy = tool_position
+    return tuple(_to_world(p, tool_position, math.cos(tool_angle), math.sin(tool_angle))
+                 for p in config.tool_points)
+
+
+def _to_world(point, origin, c: float, s: float) -> tuple[float, float]:
+    # For the paper's L (zeros in its points) this is bit for bit the formula it always had.
+    px, py = point
+    return origin[0] + px * c - py * s, origin[1] + px * s + py * c
+
+
+def _tool_gap(target, tool_position, tool_angle: float, config: WorldConfig) -> float:
+    """Distance from ``target`` to the nearest of the tool's arms (config.tool_segments)."""
     c, s = math.cos(tool_angle), math.sin(tool_angle)
-    lh = config.tool_handle_length
-    hx, hy = config.hook_end
-    if hx == 0.0:  # the paper's L, computed as it always was (bit for bit)
-        return (cx + lh * c, cy + lh * s), (cx, cy), (cx - hy * s, cy + hy * c)
-    return (cx + lh * c, cy + lh * s), (cx, cy), (cx + hx * c - hy * s, cy + hx * s + hy * c)
+    return min(_segment_distance(target, _to_world(a, tool_position, c, s), _to_world(b, tool_position, c, s))
+               for a, b, _ in config.tool_segments)
 
 
 def _segment_distance(p, a, b) -> float:
@@ -111,16 +119,16 @@ class Task:
                                               self.tool_angle)):
             out.append(f"task coordinates must be finite, got {self.coordinates.tolist()}")
             return out
-        m1, m2, m3 = _tool_points(self.tool_position, self.tool_angle, config)
+        points = _tool_points(self.tool_position, self.tool_angle, config)
         target = self.target_position
         limit = config.world_radius - config.target_radius
         if math.hypot(*target) > limit:
             out.append(f"target centre lies outside the world (|T| > {limit:g})")
         tool_limit = config.world_radius - config.tool_width / 2
-        if any(math.hypot(*p) > tool_limit for p in (m1, m2, m3)):
+        if any(math.hypot(*p) > tool_limit for p in points):
             out.append(f"tool lies outside the world (a picking location beyond {tool_limit:g})")
         clearance = config.target_radius + config.tool_width / 2
-        gap = min(_segment_distance(target, m2, m1), _segment_distance(target, m2, m3))
+        gap = _tool_gap(target, self.tool_position, self.tool_angle, config)
         if gap < clearance:
             out.append(f"target and tool overlap (gap {gap:.3f} < {clearance:g})")
         return out

@@ -62,23 +62,24 @@ class World:
         disc = pymunk.Circle(self.target, config.target_radius)
         disc.mass = config.target_mass
         self.tool = pymunk.Body()
-        lh, lk, half = config.tool_handle_length, config.tool_hook_length, config.tool_width / 2
-        handle = pymunk.Segment(self.tool, (0.0, 0.0), (lh, 0.0), half)
-        hook_end = config.hook_end
-        hook = pymunk.Segment(self.tool, (0.0, 0.0), hook_end, half)
-        # Masses on the shapes, not the body: switching back to DYNAMIC recomputes the body's
-        # mass, moment and centre of gravity from them.
-        handle.mass = config.tool_mass * lh / (lh + lk)
-        hook.mass = config.tool_mass * lk / (lh + lk)
-        for shape in (disc, handle, hook):
+        half = config.tool_width / 2
+        total = sum(length for _, _, length in config.tool_segments)
+        arms = []
+        for start, end, length in config.tool_segments:  # the L: its handle, then its hook
+            arm = pymunk.Segment(self.tool, start, end, half)
+            # Masses on the shapes, not the body: switching back to DYNAMIC recomputes the
+            # body's mass, moment and centre of gravity from them.
+            arm.mass = config.tool_mass * length / total
+            arms.append(arm)
+        for shape in (disc, *arms):
             shape.friction = 0.0
             shape.elasticity = 0.0
-        self._objects = (self.target, disc, self.tool, handle, hook)
+        self._objects = (self.target, disc, self.tool, *arms)
         self.space.add(*self._objects)
         self._target_cp, self._tool_cp = self.target._body, self.tool._body
         self._space_cp = self.space._space
         #: M1, M2, M3 in the tool's body frame (rotation pivots).
-        self.tool_frame_locations = ((lh, 0.0), (0.0, 0.0), hook_end)
+        self.tool_frame_locations = config.tool_points
 
         self.physics_steps = 0
         """Physics substeps (``cpSpaceStep`` calls) made so far (the benchmark counts them)."""

@@ -2,8 +2,9 @@
 ``_target_`` builds it (plugins.py), a built-in's as a user's.
 
 A learner's ``_target_`` is called as ``target(representation=<feature map or None>,
-num_actions=11, seed=<the run's learner stream>, world=<WorldConfig>, **algorithm keys)``; a
-representation's as ``target(**representation keys)``. ``algorithm`` and ``representation`` are
+num_actions=<the world's>, seed=<the run's learner stream>, world=<the run's world, env/door.py>,
+**algorithm keys)``; a representation's as ``target(**representation keys)`` (and
+``sensors=<the world's sensor layout>`` if it takes it). ``algorithm`` and ``representation`` are
 chosen independently on the command line, so invalid pairs (dqn with rbf: a learner's
 ``representations``) and unknown keys are caught here, before any work starts, with messages
 that name the allowed values.
@@ -16,8 +17,8 @@ from typing import Any, Mapping
 
 from .. import plugins
 from ..mapping import config_from_mapping
-from ..env.config import WorldConfig
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..env.config import WorldConfig
 from .base import Learner
 from .dqn_config import DQNConfig, layer_shapes
 from .fsr import FSRConfig
@@ -203,7 +204,7 @@ def check_learner(algorithm: str, representation: str, algorithm_params: Mapping
         return
     plugins.check_parameters("algorithm", target, algorithm_params, PROVIDED)
     if features is not None:
-        plugins.check_parameters("representation", features, representation_params)
+        plugins.check_parameters("representation", features, representation_params, ("sensors",))
     elif representation_params:
         raise ValueError(f"representation={representation} takes no keys; got {', '.join(sorted(representation_params))}")
 
@@ -213,21 +214,41 @@ def make_learner(
     representation: str,
     algorithm_params: Mapping[str, Any] | None = None,
     representation_params: Mapping[str, Any] | None = None,
-    world: WorldConfig | None = None,
+    world=None,
     seed: int = 0,
     algorithm_target: str | None = None,
     representation_target_path: str | None = None,
 ) -> Learner:
-    """A fresh learner for the 11-dim sensor vector and the 11 actions of the world (SB3's
-    learners here only act; run_sb3.py builds the one that learns, on its environment)."""
+    """A fresh learner for the world's sensor vector and actions (``world``: a world of the
+    door, env/door.py; None: the paper's). SB3's learners here only act; run_sb3.py builds the
+    one that learns, on its environment."""
+    if not hasattr(world, "sensors"):  # None or a bare config: the paper's world of it
+        from ..env.door import build_world
+
+        world = build_world(None, world) if world is not None else build_world(None, WorldConfig())
     target = learner_target(algorithm, algorithm_target)
-    features = make_features(representation, representation_params, representation_target_path)
+    features = make_features(representation, representation_params, representation_target_path, world.sensors)
     return plugins.call(target, plugins.without_target(algorithm_params or {}), representation=features,
-                        num_actions=NUM_ACTIONS, seed=seed, world=world or WorldConfig())
+                        num_actions=world.num_actions, seed=seed, world=world)
 
 
 def make_features(representation: str, representation_params: Mapping[str, Any] | None = None,
-                  target: str | None = None):
-    """The feature map phi(s) of a representation option; None for ``network`` (no feature map)."""
+                  target: str | None = None, sensors=None):
+    """The feature map phi(s) of a representation option; None for ``network`` (no feature map).
+    A representation whose target takes ``sensors`` gets the world's sensor layout (env/sensors.py)."""
     build = representation_target(representation, target)
-    return None if build is None else plugins.call(build, plugins.without_target(representation_params or {}))
+    if build is None:
+        return None
+    params = plugins.without_target(representation_params or {})
+    if sensors is not None and "sensors" in _parameters(build):
+        return plugins.call(build, params, sensors=sensors)
+    return plugins.call(build, params)
+
+
+def _parameters(target) -> set[str]:
+    import inspect
+
+    try:
+        return set(inspect.signature(target).parameters)
+    except (TypeError, ValueError):
+        return set()

@@ -18,11 +18,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..env.sensors import PAPER_SENSORS, Sensors
 from ..mapping import config_from_mapping
 from ._distance_ranges import check_numbers_and_ranges, check_positive_int
 
-NUM_BINARY = len(PICKING_LOCATIONS)
 BINARY_BINS = 2
 
 
@@ -59,23 +58,27 @@ class FSRRepresentation:
     name = "fsr"
 
     @classmethod
-    def from_params(cls, **params) -> "FSRRepresentation":
-        """``representation``'s ``_target_``: the feature map of the group's keys."""
-        return cls(config_from_mapping(FSRConfig, params, "representation"))
+    def from_params(cls, sensors: Sensors = PAPER_SENSORS, **params) -> "FSRRepresentation":
+        """``representation``'s ``_target_``: the feature map of the group's keys, for the
+        world's sensor layout."""
+        return cls(config_from_mapping(FSRConfig, params, "representation"), sensors)
 
-    def __init__(self, config: FSRConfig = FSRConfig()):
+    def __init__(self, config: FSRConfig = FSRConfig(), sensors: Sensors = PAPER_SENSORS):
         self.config = config
-        self.num_features = NUM_DISTANCES * config.distance_bins + NUM_BINARY * BINARY_BINS
+        self.num_features = sensors.num_distances * config.distance_bins + len(sensors.picking_locations) * BINARY_BINS
         #: Exactly one active feature per sensor entry.
-        self.max_active = OBSERVATION_SIZE
-        self._low = np.array([config.tool_target_low] * 3 + [config.tool_origin_low] * 3)
-        self._high = np.array([config.tool_target_high] * 3 + [config.tool_origin_high] * 3)
+        self.max_active = self._size = sensors.size
+        # Each distance binned over the range of its kind: to the target, or to the origin.
+        ranges = {"target": (config.tool_target_low, config.tool_target_high),
+                  "origin": (config.tool_origin_low, config.tool_origin_high)}
+        self._low = np.array([ranges[kind][0] for kind in sensors.kinds])
+        self._high = np.array([ranges[kind][1] for kind in sensors.kinds])
 
     def active_features(self, observation: np.ndarray, index_out: np.ndarray, value_out: np.ndarray) -> int:
         """Write the active features of phi(s) to the buffers, indices ascending (one per entry,
         in entry order); return how many there are (11)."""
-        if observation.shape != (OBSERVATION_SIZE,):
-            raise ValueError(f"observation must have shape ({OBSERVATION_SIZE},), got {observation.shape}")
+        if observation.shape != (self._size,):
+            raise ValueError(f"observation must have shape ({self._size},), got {observation.shape}")
         n = _fsr_features(observation, self._low, self._high, self.config.distance_bins, index_out, value_out)
         if n < 0:
             raise ValueError(f"observation must be finite, got {observation.tolist()}")

@@ -43,11 +43,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numba import njit
 
-from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..env.sensors import PAPER_SENSORS, Sensors
 from ..mapping import config_from_mapping
 from ._distance_ranges import check_numbers_and_ranges, check_positive_int
 
-NUM_BINARY = len(PICKING_LOCATIONS)
 
 
 @dataclass(frozen=True)
@@ -99,27 +98,30 @@ class RBFRepresentation:
     name = "rbf"
 
     @classmethod
-    def from_params(cls, **params) -> "RBFRepresentation":
-        """``representation``'s ``_target_``: the feature map of the group's keys."""
-        return cls(config_from_mapping(RBFConfig, params, "representation"))
+    def from_params(cls, sensors: Sensors = PAPER_SENSORS, **params) -> "RBFRepresentation":
+        """``representation``'s ``_target_``: the feature map of the group's keys, for the
+        world's sensor layout."""
+        return cls(config_from_mapping(RBFConfig, params, "representation"), sensors)
 
-    def __init__(self, config: RBFConfig = RBFConfig()):
+    def __init__(self, config: RBFConfig = RBFConfig(), sensors: Sensors = PAPER_SENSORS):
         self.config = config
-        bins = [config.tool_target_bins] * 3 + [config.tool_origin_bins] * 3
-        lows = [config.tool_target_low] * 3 + [config.tool_origin_low] * 3
-        highs = [config.tool_target_high] * 3 + [config.tool_origin_high] * 3
+        # Each distance gets the grid of its kind: to the target (|MiT|) or to the origin.
+        grid = {"target": (config.tool_target_bins, config.tool_target_low, config.tool_target_high),
+                "origin": (config.tool_origin_bins, config.tool_origin_low, config.tool_origin_high)}
+        bins, lows, highs = (list(column) for column in zip(*(grid[kind] for kind in sensors.kinds)))
+        num_distances, self._size = sensors.num_distances, sensors.size
         self.centres_per_dim = [np.linspace(lo, hi, b + 1) for lo, hi, b in zip(lows, highs, bins)]
         counts = np.array([len(c) for c in self.centres_per_dim], dtype=np.int64)
         self.num_gaussians = int(np.prod(counts))
-        self.num_features = self.num_gaussians + NUM_BINARY
+        self.num_features = self.num_gaussians + len(sensors.picking_locations)
         #: Upper bound on the number of active features (sizes the caller's buffers).
         self.max_active = self.num_features
         # Kernel inputs: centres padded to a (6, max centres) table; per dimension the number
         # of centres and the row-major stride of its centre index.
-        self._centres = np.zeros((NUM_DISTANCES, counts.max()))
+        self._centres = np.zeros((num_distances, counts.max()))
         for d, c in enumerate(self.centres_per_dim):
             self._centres[d, : len(c)] = c
-        strides = [int(np.prod(counts[d + 1:])) for d in range(NUM_DISTANCES)]
+        strides = [int(np.prod(counts[d + 1:])) for d in range(num_distances)]
         self._layout = np.array([counts, strides], dtype=np.int64)
         self._inv_two_var = 1.0 / (2.0 * config.sigma**2)
         # Exponent margin: a Gaussian is kept when exp(-(E - E_min)) >= cutoff.
@@ -128,8 +130,8 @@ class RBFRepresentation:
     def active_features(self, observation: np.ndarray, index_out: np.ndarray, value_out: np.ndarray) -> int:
         """Write the active features of phi(s) to the buffers, indices ascending; return how
         many there are."""
-        if observation.shape != (OBSERVATION_SIZE,):
-            raise ValueError(f"observation must have shape ({OBSERVATION_SIZE},), got {observation.shape}")
+        if observation.shape != (self._size,):
+            raise ValueError(f"observation must have shape ({self._size},), got {observation.shape}")
         n = _rbf_features(observation, self._centres, self._layout, self._inv_two_var, self._max_gap,
                           self.config.normalize, index_out, value_out)
         if n < 0:
@@ -151,14 +153,15 @@ class RBFRepresentation:
     def dense_features(self, observation) -> np.ndarray:
         """Reference phi(s): all 13829 entries, from every centre, without truncation (slow)."""
         s = np.asarray(observation, dtype=np.float64)
-        exponent = np.sum(((s[:NUM_DISTANCES] - self.centres()) / self.config.sigma) ** 2, axis=1) / 2
+        d = len(self.centres_per_dim)
+        exponent = np.sum(((s[:d] - self.centres()) / self.config.sigma) ** 2, axis=1) / 2
         if self.config.normalize:
             # Shifting the exponents cancels in the ratio and keeps far states from underflowing.
             g = np.exp(-(exponent - exponent.min()))
             g /= g.sum()
         else:
             g = np.exp(-exponent)
-        return np.concatenate([g, s[NUM_DISTANCES:]])
+        return np.concatenate([g, s[d:]])
 
 
 @njit(cache=True)

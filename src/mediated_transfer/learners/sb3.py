@@ -323,11 +323,13 @@ class SB3Learner:
 
     def __init__(self, algorithm: str, config, representation=None, world=None, seed: int = 0,
                  env=None, num_actions: int = NUM_ACTIONS):
-        from ..env.mediated_env import MediatedInteractionEnv
-
         self.algorithm, self.config, self.num_actions = algorithm, config, num_actions
-        if env is None:
-            env = MediatedInteractionEnv("target", world)
+        if env is None:  # a learner that only acts (a saved one): SB3 takes the spaces from an env
+            if world is None:
+                from ..env.paper import PaperWorld
+
+                world = PaperWorld()
+            env = world.make_env("target")
         self.model = build_model(algorithm, config, representation, env, seed)
         self.episodes = 0
 

@@ -22,7 +22,6 @@ from dataclasses import dataclass, replace
 from functools import partial
 from typing import TYPE_CHECKING
 
-from ..env.mediated_env import MediatedInteractionEnv
 from ..learners.factory import make_learner, own_run_loop
 from ..recorder import EvaluationFn, FinishFn, ProgressFn, RunRecorder, RunStreams
 from ..results import RunResult
@@ -70,7 +69,7 @@ def cpu_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams]) -> PerS
     spec = specs[0]
     return PerSeedLearners([
         make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                     spec.representation_params, world=spec.world, seed=s.learner_seed,
+                     spec.representation_params, world=spec.make_world(), seed=s.learner_seed,
                      algorithm_target=spec.algorithm_target,
                      representation_target_path=spec.representation_target)
         for s in streams])
@@ -128,7 +127,7 @@ def step_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams], group:
         raise ValueError(f"strategy={specs[0].strategy} asks for the learner's TD errors, which "
                          f"{type(group).__name__} (lockstep.device={device}) does not compute; "
                          "use lockstep.device=cpu")
-    envs = [MediatedInteractionEnv("target", spec.world) for spec in specs]
+    envs = [spec.make_world().make_env("target") for spec in specs]
     observations: list = [None] * len(specs)
     results: list[RunResult | None] = [None] * len(specs)
 

@@ -47,13 +47,13 @@ LIBRARIES = ("numpy", "numba", "torch", "pymunk", "gymnasium", "stable-baselines
 
 def run_roots(spec: "RunSpec", lockstep: bool = False) -> list[Any]:
     """What computes ``spec``'s run: its loop, learner, representation, strategy and world."""
-    from ..env.mediated_env import MediatedInteractionEnv
+    from ..env.door import world_class
     from ..learners.factory import learner_target, representation_target
     from ..run import execute_run, own_run_loop
 
     loop = own_run_loop(spec) or execute_run
     roots = [loop, learner_target(spec.algorithm, spec.algorithm_target), spec.strategy_class(),
-             MediatedInteractionEnv]
+             world_class(spec.world_target)]
     features = representation_target(spec.representation, spec.representation_target)
     if features is not None:
         roots.append(features)

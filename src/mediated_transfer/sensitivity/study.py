@@ -11,8 +11,8 @@ from omegaconf import DictConfig, OmegaConf
 from hydra.core.override_parser.overrides_parser import OverridesParser
 
 from ..config.compose import compose_config, prepare_overrides
-from ..mapping import config_from_mapping
 from ..env.config import WorldConfig
+from ..env.door import world_config
 from ..reporting.compose import variant_of
 from ..sweep import planned_jobs
 
@@ -84,7 +84,8 @@ def load_study(overrides: Sequence[str] = ()) -> Study:
     worlds = []
     for option in values["env"]:
         cfg = compose_config([f"experiment={EXPERIMENT}", *learner, f"env={option}"], hydra=True)
-        world = config_from_mapping(WorldConfig, OmegaConf.to_container(cfg.env, resolve=True), "env")
+        node = OmegaConf.to_container(cfg.env, resolve=True)
+        world = world_config(node.pop("_target_", None), node)
         worlds.append(World(option, world, variant_of(cfg)))
     cells = ["none_0"] + [c for c in values["cell"] if c != "none_0"]
     return Study(base, tuple(worlds), tuple(cells), tuple(sorted(int(s) for s in values["seed"])),

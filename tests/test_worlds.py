@@ -1,0 +1,89 @@
+"""The world door (env/door.py): the paper's world is an ``env`` option with a ``_target_``, and
+the example worlds of docs/extending.md (examples/worlds/, outside src/) run end to end at
+smoke scale through the command line, as a user runs them: a table sweep and its report, and
+an animation; a bad key of a world is one line before any work."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from mediated_transfer.config.compose import ConfigError, compose_config
+from mediated_transfer.config.spec import comparable, run_spec, spec_from_dict
+
+REPO = Path(__file__).resolve().parents[1]
+WORLDS = REPO / "examples" / "worlds"
+SEARCHPATH = "hydra.searchpath=[pkg://my_worlds.conf]"
+
+
+def _cli(root: Path, *args: str, module: str = "mediated_transfer", smoke: bool = True) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(WORLDS), os.environ.get("PYTHONPATH", "")])}
+    extra = ["tracking=none", "scale=smoke", f"paths.root={root}"] if smoke else []
+    return subprocess.run([sys.executable, "-m", module, *args, SEARCHPATH, *extra],
+                          capture_output=True, text=True, env=env, cwd=REPO, timeout=600)
+
+
+def _sweep_and_report(root: Path, experiment: str, cell: str, world: str) -> dict:
+    ran = _cli(root, "-m", f"experiment={experiment}", "hydra/launcher=basic", "seed=0", f"cell={cell}", f"env={world}")
+    assert ran.returncode == 0, ran.stderr[-2000:]
+    report = _cli(root, f"experiment={experiment}", f"env={world}", module="mediated_transfer.reporting")
+    assert report.returncode == 0, report.stderr[-2000:]
+    return json.loads((root / f"multirun/{experiment}/smoke/{cell}/seed=0/env={world}/result.json").read_text())
+
+
+def test_the_paper_world_comes_through_the_door_with_its_target():
+    spec = run_spec(compose_config(["scale=smoke"]))
+    assert spec.world_target == "mediated_transfer.env.paper.PaperWorld"
+    assert type(spec.make_world()).__name__ == "PaperWorld"
+    # A result recorded before worlds had a _target_ is the same run (the paper's world).
+    values = comparable(spec)
+    recorded = spec_from_dict({**{k: v for k, v in values.items()}, "world_target": None})
+    assert comparable(recorded) == values and recorded.make_world().config == spec.world
+
+
+@pytest.mark.parametrize("override,message", [
+    ("env._target_=nowhere.World", "env._target_=nowhere.World: not importable"),
+    ("env._target_=mediated_transfer.env.config.WorldConfig",
+     "env._target_=mediated_transfer.env.config.WorldConfig: WorldConfig does not implement the world interface: no method 'make_env'"),
+    ("env.goal_radiu=1", "unknown key 'env.goal_radiu'; did you mean 'env.goal_radius'?"),
+])
+def test_a_bad_world_is_one_line(override, message):
+    with pytest.raises(ConfigError, match="^" + message.replace("(", r"\(").replace(".", r"\.").replace("?", r"\?")):
+        run_spec(compose_config(["scale=smoke", override]))
+
+
+def test_a_rake_runs_in_a_table_sweep_and_its_report(tmp_path):
+    result = _sweep_and_report(tmp_path, "table2_rbf", "regular_1", "rake")
+    assert result["config"]["env"]["_target_"] == "my_worlds.rake.RakeWorld"
+    assert result["config"]["env"]["rake_head_length"] == 6.0
+    reports = [p for p in tmp_path.glob("reports/**/*.md") if "rake" in str(p)]
+    assert reports and "regular transfer" in reports[0].read_text(), sorted(tmp_path.glob("reports/**/*"))
+
+
+def test_a_world_with_an_extra_sensor_runs_in_a_table_sweep_and_its_report(tmp_path):
+    result = _sweep_and_report(tmp_path, "table3_fsr", "none_0", "target_distance")
+    assert result["config"]["env"]["_target_"] == "my_worlds.sensor.TargetDistanceWorld"
+    assert len(result["mean_reward"]) == 2
+
+
+@pytest.mark.parametrize("world,policy", [("rake", "random"), ("target_distance", "scripted")])
+def test_animate_shows_a_plugin_world(tmp_path, world, policy):
+    out = tmp_path / f"{world}.gif"
+    ran = _cli(tmp_path, "--env", world, "--out", str(out), "--seed", "1", module="mediated_transfer.env.animate",
+               smoke=False)
+    assert ran.returncode == 0, ran.stderr[-2000:]
+    assert out.stat().st_size > 0 and f"{policy} policy on a target task" in ran.stdout
+
+
+def test_a_bad_key_of_a_plugin_world_is_one_line_before_any_work(tmp_path):
+    ran = _cli(tmp_path, "env=rake", "env.rake_head_lengt=3")
+    assert ran.returncode != 0 and "Traceback" not in ran.stderr, ran.stderr[-1500:]
+    assert "unknown key 'env.rake_head_lengt'; did you mean 'env.rake_head_length'?" in ran.stderr
+    ran = _cli(tmp_path, "env=rake", "env.rake_head_length=-1")
+    assert "env.rake_head_length must be > 0, got -1" in ran.stderr, ran.stderr[-1500:]
+    assert not (tmp_path / "runs").exists()
