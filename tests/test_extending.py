@@ -18,7 +18,8 @@ SEARCHPATH = f"hydra.searchpath=[file://{PLUGINS / 'my_plugins' / 'conf'}]"
 
 
 def _cli(root: Path, *args: str, module: str = "mediated_transfer") -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(PLUGINS)}
+    # Beside the PYTHONPATH the suite runs under (a worktree's src/ before the installed copy).
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(PLUGINS), *filter(None, [os.environ.get("PYTHONPATH")])])}
     return subprocess.run([sys.executable, "-m", module, *args, SEARCHPATH, "tracking=none", "scale=smoke",
                            f"paths.root={root}"], capture_output=True, text=True, env=env, cwd=REPO, timeout=600)
 

@@ -21,6 +21,7 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 
 from .config.compose import CONF_DIR, CONFIG_NAME, ConfigError, first_line, prepare_overrides
+from .config.help import app_help
 from .sweep import faults, interrupted, preflight
 from .sweep.job import run_job, run_jobs  # noqa: F401 - the launchers' and tests' door
 
@@ -74,7 +75,9 @@ def _cli(args: list[str], parsed, runs: list) -> Any:
         if parsed.config_name or parsed.config_path or parsed.config_dir:
             raise ConfigError("--config-name/--config-path/--config-dir: this entry point composes "
                               "conf/config.yaml; choose an experiment with experiment=<name>")
-        prepared = prepare_overrides(parsed.overrides)
+        prepared = prepare_overrides(parsed.overrides)  # also checks a hydra.searchpath
+        if parsed.help:  # Hydra's help, with the search path's options (config/help.py)
+            return app_help(parsed, prepared)
         # --version exits inside the parser; these only print something: nothing to check or prepare.
         informational = (parsed.help or parsed.hydra_help or parsed.cfg or parsed.info
                          or parsed.shell_completion)

@@ -84,14 +84,25 @@ def without_target(params: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def path_of(target: Any) -> str:
+    """The dotted path that names ``target``. A classmethod inherited by a plugin's class
+    (``my_plugins.sarsa.Sarsa.from_params``, defined on the built-in learner) is named by the
+    class it is bound to: its function alone would name the built-in."""
+    owner = getattr(target, "__self__", None)
+    if isinstance(owner, type):
+        return f"{owner.__module__}.{owner.__qualname__}.{target.__name__}"
     module = getattr(target, "__module__", None) or type(target).__module__
     name = getattr(target, "__qualname__", None) or type(target).__qualname__
     return f"{module}.{name}"
 
 
+def package_of(target: Any) -> str:
+    """The top-level package of the code ``target`` names (a bound classmethod: its class's)."""
+    return path_of(target).split(".")[0]
+
+
 def identity(target: Any) -> dict[str, Any]:
     """What result.json records of a plugin: its dotted path, its distribution and version."""
-    module = getattr(target, "__module__", "") or ""
+    module = path_of(target).rsplit(".", 1)[0]
     top = module.split(".")[0]
     distributions = importlib.metadata.packages_distributions().get(top, [])
     version = None

@@ -22,7 +22,9 @@ paper runs' result.json and curve.csv).
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import os
 from dataclasses import asdict
 from pathlib import Path
@@ -110,15 +112,21 @@ def load_learner(folder: str | os.PathLike) -> tuple["Learner", "RunSpec"]:
             raise SavedLearnerError(f"{path} has format {meta.get('format')!r}; this code "
                                     f"reads format {FORMAT}")
         spec = spec_from_dict(meta["spec"])
-        # The learner's generator state is restored from the file: the seed here does not matter.
-        learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
-                               spec.representation_params, world=spec.make_world(), seed=0)
+        # Built by the targets the run recorded (a plugin's learner or representation is no
+        # option of conf/); the generator state is restored from the file: the seed does not matter.
+        with _quiet("hydra.utils"):  # it logs an import failure in 3 lines; the error below says it in one
+            learner = make_learner(spec.algorithm, spec.representation, spec.algorithm_params,
+                                   spec.representation_params, world=spec.make_world(), seed=0,
+                                   algorithm_target=spec.algorithm_target,
+                                   representation_target_path=spec.representation_target)
         learner.load_state_dict(state)  # type: ignore[attr-defined]
     except SavedLearnerError:
         raise
     except Exception as error:  # noqa: BLE001 - a damaged or foreign file: say so in one line
+        hint = ("; the run's plugin must be importable: put its package on PYTHONPATH"
+                if "not importable" in str(error) else "")
         raise SavedLearnerError(f"{path} cannot be loaded: {type(error).__name__}: "
-                                f"{_first_line(error)}") from None
+                                f"{_first_line(error)}{hint}") from None
     _check_result(folder, spec, path)
     return learner, spec
 
@@ -158,6 +166,16 @@ def _check_result(folder: Path, spec: "RunSpec", path: Path) -> None:
     if recorded != comparable(spec):
         raise SavedLearnerError(f"{path} was trained under another configuration than "
                                 f"{folder / 'result.json'}; rerun the run to save its learner")
+
+
+@contextlib.contextmanager
+def _quiet(logger: str):
+    level = logging.getLogger(logger).level
+    logging.getLogger(logger).setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logging.getLogger(logger).setLevel(level)
 
 
 def _first_line(error: BaseException) -> str:

@@ -51,9 +51,10 @@ def prepare_overrides(overrides: Sequence[str]) -> list[str]:
     Hydra reads an unquoted 7 as the integer 7 and rejects it as a group choice, whose options
     are names; quoting keeps the natural spelling usable.
     """
+    dirs = _searchpath(overrides)
     out = []
     for arg in overrides:
-        _check_tuned_choice(arg)
+        _check_tuned_choice(arg, dirs)
         try:
             [override] = OverridesParser.create().parse_overrides([arg])
         except HydraException as error:
@@ -81,12 +82,30 @@ def _numeric_choice(group: str, text: str) -> int:
     return int(text)
 
 
-def _check_tuned_choice(arg: str) -> None:
+def _searchpath(overrides: Sequence[str]) -> list[Path]:
+    """The command's plugin folders, each checked (config/searchpath.py); the tuned options of
+    its learners that extend a built-in registered (config/tuned.py)."""
+    from .searchpath import searchpath_dirs
+    from .tuned import register_inherited
+
+    try:
+        dirs = searchpath_dirs(overrides)
+    except HydraException as error:
+        raise ConfigError(first_line(str(error))) from None
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
+    register_inherited(dirs)
+    return dirs
+
+
+def _check_tuned_choice(arg: str, search_dirs: Sequence[Path]) -> None:
     # `tuned` is an optional group (a learner without Table I values has no file), so Hydra
     # would silently skip a misspelt choice: refuse it here.
+    from .tuned import tuned_options
+
     match = re.fullmatch(r"tuned=([\w.-]+)", arg)
     if match:
-        allowed = sorted(p.stem for p in (CONF_DIR / "tuned").glob("*.yaml"))
+        allowed = tuned_options(search_dirs)
         if match.group(1) not in allowed:
             raise ConfigError(f"tuned={match.group(1)}: no such option; allowed: {', '.join(allowed)}")
 
@@ -126,10 +145,14 @@ __process_state__ = ("_SEARCH_DIRS",)
 
 
 def _remember_search_dirs(cfg: DictConfig) -> None:
-    # Where Hydra found configs (hydra.searchpath, SearchPathPlugins): a user's plugin folders.
-    sources = OmegaConf.select(cfg, "hydra.runtime.config_sources") or []
+    _SEARCH_DIRS[:] = source_dirs(OmegaConf.select(cfg, "hydra.runtime.config_sources") or [])
+
+
+def source_dirs(sources: Sequence[Any]) -> list[Path]:
+    """The folders of Hydra's ``hydra.runtime.config_sources`` beside conf/ (hydra.searchpath,
+    SearchPathPlugins): a user's plugin folders."""
     dirs = [_source_dir(str(s.schema), str(s.path)) for s in sources if str(s.provider) not in ("hydra", "main")]
-    _SEARCH_DIRS[:] = [d for d in dirs if d is not None and d != CONF_DIR]
+    return [d for d in dirs if d is not None and d != CONF_DIR]
 
 
 def _source_dir(schema: str, path: str) -> Path | None:

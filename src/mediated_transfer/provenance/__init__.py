@@ -95,7 +95,9 @@ def code_version(spec: "RunSpec", lockstep: bool = False) -> dict[str, Any]:
     version: dict[str, Any] = {"commit": _git("rev-parse", "HEAD"), "dirty": _dirty(),
                                "digest": run_digest(spec, lockstep), "scheme": SCHEME,
                                "algorithm": spec.algorithm, "versions": library_versions()}
-    foreign = [plugins.identity(r) for r in run_roots(spec, lockstep) if _top(r) != PROJECT]
+    # A root's package by the class it is bound to: a plugin learner that inherits a built-in's
+    # ``from_params`` is the plugin's.
+    foreign = [plugins.identity(r) for r in run_roots(spec, lockstep) if plugins.package_of(r) != PROJECT]
     if foreign:
         version["plugins"] = foreign
     if lockstep:

@@ -110,6 +110,8 @@ def _run_jobs(jobs: Sequence[Job]) -> list[dict]:
                 summaries[i] = _report(job, *found)
             else:
                 pending.append((i, job))
+        for _, job in pending:
+            _log_tuned(job.label)
         if pending and (len(pending) > 1 or str(pending[0][1].cfg.lockstep.device) != "cpu"):
             results = _compute_lockstep([job for _, job in pending])
         else:
@@ -118,6 +120,18 @@ def _run_jobs(jobs: Sequence[Job]) -> list[dict]:
         for (i, job), result in zip(pending, results):
             summaries[i] = _report(job, result, "done", None)
     return summaries  # type: ignore[return-value]
+
+
+def _log_tuned(label: str) -> None:
+    """Which tuned file (Table I's values) the run got, or that none did (config/tuned.py)."""
+    from hydra.core.hydra_config import HydraConfig
+
+    from ..config.compose import source_dirs
+    from ..config.tuned import tuned_line
+
+    if HydraConfig.initialized():  # composed by Hydra: a command's job, not a direct call
+        runtime = HydraConfig.get().runtime
+        log.info("%s: %s", label, tuned_line(runtime.choices, source_dirs(runtime.config_sources)))
 
 
 class _JobRef:
