@@ -9,15 +9,16 @@ import math
 import numpy as np
 import pytest
 
-from mediated_transfer.reporting.intervals import (bootstrap, format_interval, iqm, probability_of_improvement,
-                                                   ratio_of_means, ratio_of_medians, seeds_to_decide, sem)
-from mediated_transfer.metrics import reward_loss, time_to_threshold
+from mediated_transfer.reporting.intervals import (bootstrap, format_interval, iqm, mean_curve_time,
+                                                   probability_of_improvement, ratio_of_means, ratio_of_medians,
+                                                   resample_indices, seeds_to_decide, sem)
+from mediated_transfer.metrics import reward_loss, time_to_threshold, times_to_threshold_of_curves
 from mediated_transfer.reporting.collect import CellRuns
 from mediated_transfer.reporting.paper import paper_rows
-from mediated_transfer.reporting.reproduction import (CLAIMS, Learner, claim_2, claim_6, evaluate, headline, main,
+from mediated_transfer.reporting.reproduction import (CLAIMS, Learner, claim_2, claim_5, claim_6, evaluate, headline, main,
                                                       same_runs, verdict_count)
 from mediated_transfer.reporting.verdicts import (ABSENT, DIRECTION, FAILS, HOLDS, NOT_REPRODUCED, OTHER_WAY,
-                                                  REPRODUCED, SHORT, VERDICTS, claim_verdict)
+                                                  REPRODUCED, SHORT, UNDECIDED, VERDICTS, claim_verdict)
 from mediated_transfer.results import RunResult
 
 from .optional import needs_deep
@@ -123,6 +124,48 @@ def test_claim_6_robustness_is_absent_not_undecided_when_the_estimate_points_aga
     robust = next(p for p in claim_6({"IV": _learner("IV", reached)}).parts if p.name == "more robust")
     assert [r.outcome for r in robust.rows] == [ABSENT] and robust.verdict == NOT_REPRODUCED
     assert "would need about" in robust.rows[0].note
+
+
+def test_the_times_to_threshold_of_many_curves_are_each_curves_time_to_threshold():
+    rng = np.random.default_rng(5)
+    curves = np.vstack([rng.uniform(6, 10, (2_000, 25)), np.full((1, 25), 9.0), np.full((1, 25), 2.0),
+                        np.r_[np.full(24, 9.0), 7.0][None, :], np.r_[7.0, np.full(24, 8.0 - 1e-12)][None, :]])
+    each = [time_to_threshold(STEPS, c) for c in curves]
+    assert times_to_threshold_of_curves(STEPS, curves).tolist() == [math.inf if t is None else t for t in each]
+
+
+def test_the_mean_curves_bootstrap_reads_every_resample_as_the_mean_curve_is_read():
+    rng = np.random.default_rng(7)
+    curves = np.clip(np.linspace(2, 9.5, 25) + rng.normal(0, 1.5, (20, 25)), 0, 10)
+    curves[:4] = 2.0  # 4 of 20 runs never learn
+    found = mean_curve_time(curves, STEPS)
+    picks = resample_indices(20)
+    each = [time_to_threshold(STEPS, curves[i].mean(axis=0)) for i in picks]
+    assert found.share_reaching == pytest.approx(np.mean([t is not None for t in each]))
+    point = time_to_threshold(STEPS, curves.mean(axis=0))
+    assert found.interval[0] == (math.inf if point is None else point)
+    assert mean_curve_time(curves, STEPS) == found  # seeded
+    # the resamples are bootstrap's own: the same seed draws the same runs
+    values = rng.normal(size=20)
+    assert bootstrap(np.mean, values)[1:] == tuple(np.quantile(values[picks].mean(axis=1), [0.025, 0.975]))
+    # rows every resample agrees on
+    assert mean_curve_time(np.full((20, 25), 9.0), STEPS) == mean_curve_time(np.full((3, 25), 9.0), STEPS)
+    assert mean_curve_time(np.full((20, 25), 9.0), STEPS).share_reaching == 1.0
+    never = mean_curve_time(np.full((20, 25), 2.0), STEPS)
+    assert never.share_reaching == 0.0 and never.interval == (math.inf, math.inf, math.inf)
+    with pytest.raises(ValueError, match="non-empty"):
+        mean_curve_time(np.empty((0, 25)), STEPS)
+
+
+def test_claim_5_reads_the_mean_curve_with_its_bootstrap():
+    # 4 of 20 runs without transfer never learn (the case) or 5: the mean curve ends at the
+    # threshold (9.5 - 4 x 7.5 / 20 = 8.0) or just below it (7.625: never), and resamples go either
+    # way: undecided, whichever way the mean curve itself falls (R3). 16 of 20: never, decided.
+    for never, outcome in ((5, UNDECIDED), (4, UNDECIDED), (16, HOLDS), (0, FAILS)):
+        reached = {"none_0": [None] * never + [80_000] * (20 - never), "regular_100": [80_000] * 20}
+        reach = claim_5({"IV": _learner("IV", reached)}).parts[0]
+        assert [r.outcome for r in reach.rows] == [outcome, HOLDS], never
+        assert "% of resamples" in reach.rows[0].ours
 
 
 def test_claim_2_counts_the_same_runs_once_and_only_the_linear_learners():

@@ -87,10 +87,38 @@ def test_r2_a_value_without_a_no_difference_is_never_undecided(interval, paper, 
 
 
 # --- R3, R4 -------------------------------------------------------------------------------------
-@pytest.mark.parametrize("ours, paper, outcome", [
-    (True, True, HOLDS), (False, False, HOLDS), (True, False, FAILS), (False, True, FAILS)])
-def test_r3_reaching_the_threshold_as_the_paper_says(ours, paper, outcome):
-    assert reaches_threshold(ours, paper) == outcome
+@pytest.mark.parametrize("share, paper, outcome", [
+    (1.0, True, HOLDS),          # every resample's mean curve reaches it, as the paper says
+    (0.975, True, HOLDS),        # at least 97.5 %: the boundary holds
+    (0.9749, True, UNDECIDED),   # just short of it
+    (0.58, True, UNDECIDED),
+    (0.0251, True, UNDECIDED),
+    (0.025, True, FAILS),        # never in at least 97.5 % of resamples: the opposite holds
+    (0.0, True, FAILS),
+    (0.0, False, HOLDS),         # the paper says never: never in every resample
+    (0.025, False, HOLDS),       # never in 97.5 % (250 of 10,000 resamples reach it)
+    (0.0251, False, UNDECIDED),
+    (0.42, False, UNDECIDED),    # the case: the mean curve never, yet it reaches in 42 %
+    (0.9749, False, UNDECIDED),
+    (0.975, False, FAILS),       # reaches in at least 97.5 % though the paper says never
+    (1.0, False, FAILS),
+])
+def test_r3_reaching_the_threshold_as_the_paper_says_in_at_least_97_5_percent_of_resamples(share, paper, outcome):
+    assert reaches_threshold(share, paper) == outcome
+
+
+def test_r3_a_count_of_resamples_on_the_boundary_decides_despite_round_off():
+    assert reaches_threshold(9_750 / 10_000, True) == HOLDS
+    assert reaches_threshold(250 / 10_000, False) == HOLDS
+    assert reaches_threshold(1 - 9_750 / 10_000, False) == HOLDS
+    assert reaches_threshold(251 / 10_000, False) == UNDECIDED
+    assert reaches_threshold(9_749 / 10_000, True) == UNDECIDED
+
+
+@pytest.mark.parametrize("share", [-0.1, 1.1, math.nan])
+def test_r3_refuses_what_is_not_a_share(share):
+    with pytest.raises(ValueError, match="not a share"):
+        reaches_threshold(share, True)
 
 
 @pytest.mark.parametrize("never, runs, outcome", [

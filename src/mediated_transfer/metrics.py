@@ -82,6 +82,28 @@ def time_to_threshold(
     return int(steps[last_below + 1])
 
 
+def times_to_threshold_of_curves(
+    steps,
+    curves,
+    threshold: float = _DEFAULT.threshold,
+    tolerance: float = _DEFAULT.tolerance,
+) -> np.ndarray:
+    """``time_to_threshold`` of each row of a curves x evaluation points array at once (e.g. the
+    mean curves of many bootstrap resamples), as floats: +inf where a curve never reaches it."""
+    steps = _steps(steps)
+    rewards = np.asarray(curves, dtype=float)
+    if rewards.ndim != 2 or rewards.shape[1] != len(steps) or not np.all(np.isfinite(rewards)):
+        raise ValueError(f"curves must be a finite curves x {len(steps)} points array, got shape {rewards.shape}")
+    below = rewards < threshold - tolerance
+    points = len(steps)
+    # the index of each curve's last point below the threshold, -1 where none is
+    last_below = np.where(below.any(axis=1), points - 1 - np.argmax(below[:, ::-1], axis=1), -1)
+    times = np.full(len(rewards), math.inf)
+    reached = last_below < points - 1
+    times[reached] = steps[last_below[reached] + 1]
+    return times
+
+
 def first_point_at_threshold(mean_rewards, threshold: float = _DEFAULT.threshold) -> int | None:
     """Index of the first evaluation point with <R> >= threshold, reached once (unlike time to
     threshold, the curve may fall below it again later); None: never."""

@@ -1,6 +1,6 @@
 """Interval estimates over runs for the reproduction report (rliable-style, Agarwal et al. 2021):
-percentile-bootstrap intervals of a ratio of means, the interquartile mean, and the probability
-of improvement. Pure functions of per-run values; resampling is seeded, so a report rebuilds
+percentile-bootstrap intervals of a ratio of means and of a mean curve's time to threshold, the
+interquartile mean, and the probability of improvement. Pure functions of per-run values; resampling is seeded, so a report rebuilds
 identically from the same runs.
 """
 
@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
+
+from ..metrics import MetricsConfig, time_to_threshold, times_to_threshold_of_curves
 
 RESAMPLES = 10_000
 CONFIDENCE = 0.95
@@ -49,11 +52,54 @@ def bootstrap(statistic: Callable[..., float], *groups: Sequence[float], resampl
     values = np.empty(resamples)
     for i in range(resamples):
         values[i] = statistic(*(a[rng.integers(0, a.size, a.size)] for a in arrays))
+    return percentile_interval(point, values)
+
+
+def percentile_interval(point: float, values: np.ndarray) -> tuple[float, float, float]:
+    """(point, low, high): the 95 % percentile interval of resampled ``values``, nan and +inf
+    ranked as +inf (a ratio over a zero mean, a time never reached)."""
     values = np.where(np.isnan(values), np.inf, values)
     tail = (1 - CONFIDENCE) / 2
     with np.errstate(invalid="ignore"):  # between two inf values numpy's interpolation gives nan
         low, high = np.quantile(values, tail), np.quantile(values, 1 - tail)
     return float(point), float(np.nan_to_num(low, nan=np.inf)), float(np.nan_to_num(high, nan=np.inf))
+
+
+def resample_indices(runs: int, resamples: int = RESAMPLES, seed: int = SEED) -> np.ndarray:
+    """resamples x runs indices of runs, drawn with replacement exactly as ``bootstrap`` draws a
+    single group's (the same seed gives the same resamples)."""
+    if runs <= 0:
+        raise ValueError("every group needs at least one run")
+    rng = np.random.default_rng(seed)
+    return np.stack([rng.integers(0, runs, runs) for _ in range(resamples)])
+
+
+@dataclass(frozen=True)
+class MeanCurveTime:
+    """A row's mean curve's time to threshold over its runs, with its bootstrap (verdicts R3)."""
+
+    share_reaching: float
+    """The share of resamples whose mean curve reaches the threshold."""
+    interval: tuple[float, float, float]
+    """(point, low, high) of the mean curve's time to threshold, +inf = never (beyond the budget)."""
+
+
+def mean_curve_time(curves, steps, config: MetricsConfig = MetricsConfig(), resamples: int = RESAMPLES,
+                    seed: int = SEED) -> MeanCurveTime:
+    """The time to threshold of the mean of ``curves`` (runs x evaluation points) and its percentile
+    bootstrap over runs: each resample's mean curve is read as the mean curve is (metrics'
+    time_to_threshold), all resamples at once."""
+    curves = np.asarray(curves, dtype=float)
+    if curves.ndim != 2 or curves.shape[0] == 0:
+        raise ValueError(f"curves must be a non-empty runs x evaluation points array, got shape {curves.shape}")
+    runs = curves.shape[0]
+    point = time_to_threshold(steps, curves.mean(axis=0), config.threshold, config.tolerance)
+    picks = resample_indices(runs, resamples, seed)
+    counts = np.zeros((resamples, runs))
+    np.add.at(counts, (np.arange(resamples)[:, None], picks), 1.0)
+    times = times_to_threshold_of_curves(steps, counts @ curves / runs, config.threshold, config.tolerance)
+    share = float(np.isfinite(times).mean())
+    return MeanCurveTime(share, percentile_interval(math.inf if point is None else point, times))
 
 
 def ratio_of_means(numerator: Sequence[float], denominator: Sequence[float]) -> tuple[float, float, float]:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 HOLDS = "holds"
 OTHER_WAY = "holds the other way"  # R1
 ABSENT = "absent"  # R1
-UNDECIDED = "undecided"  # R1, R2
+UNDECIDED = "undecided"  # R1, R2, R3
 SHORT = "falls short"  # R2
 FAILS = "does not hold"  # R3, R4
 AGAINST = (OTHER_WAY, SHORT, FAILS)
@@ -58,9 +58,16 @@ entirely on the other side of the paper's number; it is **undecided** when the i
 both the paper's number and no difference.
 
 **R3, reaching the threshold.** Where the paper says a row reaches the threshold or never does,
-ours is read as the paper's is, from the row's mean curve over its runs (the first evaluation
-point from which it stays at <R> >= 8 to the end of the budget). The row **holds** when ours does
-as the paper says, and **does not hold** otherwise.
+ours is read as the paper reads its own, from the row's mean curve over its runs (those that ran
+their budget, as in every statistic of a row; a run stopped as failed is named beside it, not
+averaged): its time to threshold is the first evaluation point from which it stays at <R> >= 8 to
+the end of the budget, never when it ends below. The uncertainty is a 95 % percentile bootstrap
+over runs (10,000 resamples, seeded, as R1): the share of resamples whose mean curve reaches the
+threshold, shown beside the interval of the mean curve's time to threshold (never = beyond the
+budget). The row **holds** when the paper's statement (it reaches the threshold, or never does)
+holds in at least 97.5 % of resamples, as R1 asks the whole interval on the claim's side; it
+**does not hold** when the opposite holds in at least 97.5 % of resamples; it is **undecided**
+otherwise.
 
 **R4, "not learned at all".** A row the paper says is not learned at all **holds** when more than
 half of its runs never reach <R> >= 8 at any evaluation point, and **does not hold** otherwise.
@@ -117,10 +124,24 @@ def size(interval: tuple[float, float, float], paper: float, side: str, null: fl
 
 
 # --- R3, R4 -------------------------------------------------------------------------------------
-def reaches_threshold(ours_reaches: bool, paper_reaches: bool) -> str:
-    """R3: a row's mean curve reaches the threshold (``ours_reaches``) as the paper says it does
-    (``paper_reaches``), or not."""
-    return HOLDS if ours_reaches == paper_reaches else FAILS
+DECIDING_SHARE = 0.975
+"""R3: the share of resamples a statement (reaches, or never does) must hold in to decide a row,
+the upper end of a 95 % interval."""
+_SLACK = 1e-9
+"""Float round-off of a share (1 - 0.975 is not exactly 0.025): 250 of 10,000 resamples is 2.5 %."""
+
+
+def reaches_threshold(share_reaching: float, paper_reaches: bool) -> str:
+    """R3: ``share_reaching`` is the share of bootstrap resamples of the row's runs whose mean curve
+    reaches the threshold; the paper says the row reaches it (``paper_reaches``) or never does."""
+    if math.isnan(share_reaching) or not 0.0 <= share_reaching <= 1.0:
+        raise ValueError(f"{share_reaching} is not a share of resamples")
+    as_the_paper = share_reaching if paper_reaches else 1.0 - share_reaching
+    if as_the_paper >= DECIDING_SHARE - _SLACK:
+        return HOLDS
+    if as_the_paper <= 1.0 - DECIDING_SHARE + _SLACK:
+        return FAILS
+    return UNDECIDED
 
 
 def not_learned_at_all(never_learn: int, runs: int) -> str:

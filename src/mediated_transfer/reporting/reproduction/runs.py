@@ -12,6 +12,7 @@ import numpy as np
 from ...metrics import MetricsConfig, first_point_at_threshold
 from ...provenance.judge import stale
 from ..collect import CellRuns, collect_sweep
+from ..intervals import MeanCurveTime, mean_curve_time
 from ..paper import paper_rows
 
 TABLES = {"II": ("table2_rbf", "RBF"), "III": ("table3_fsr", "FSR"), "IV": ("table4_dnn", "DNN")}
@@ -54,6 +55,12 @@ class Learner:
     def mean_curve_time(self, cell: str) -> int | None:
         """The time to threshold of the row's mean curve: how the paper reads its own."""
         return self.cells[cell].summary(MetricsConfig())["time_to_threshold"]
+
+    def mean_curve_reaching(self, cell: str) -> MeanCurveTime:
+        """The mean curve's time to threshold with its bootstrap over the row's runs (R3): over the
+        runs that ran their budget, as the mean curve is."""
+        runs = self.runs(cell)
+        return mean_curve_time([r.mean_reward for r in runs], runs[0].steps, MetricsConfig())
 
     def paper_time(self, cell: str) -> float:
         """The paper's time to threshold of a row, +inf where it has "-" (never reached)."""

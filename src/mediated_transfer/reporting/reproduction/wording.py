@@ -1,5 +1,6 @@
 """How the report writes its numbers, shared by the claims and the tables: learning steps in
-thousands ("80k", "never"), a span of ratios, a row of a part with its interval."""
+thousands ("80k", "never"), a span of ratios, a row of a part with its interval, a mean curve's
+time to threshold with its bootstrap."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import math
 
 import numpy as np
 
-from ..intervals import format_interval
+from ..intervals import MeanCurveTime, format_interval
 from ..verdicts import Row
 from .runs import Learner
 
@@ -35,3 +36,17 @@ def median_times(learner: Learner, a: str, b: str) -> str:
     """Median per-run times to threshold of two rows, as 'a / b: '."""
     return (f"{steps_k(np.median(learner.times_to_threshold(a)))} / "
             f"{steps_k(np.median(learner.times_to_threshold(b)))}: ")
+
+
+def reaching(evidence: MeanCurveTime) -> str:
+    """A mean curve's time to threshold with its interval and the share of resamples that reach
+    it (R3), as 'mean curve never [80k, never], reaches in 42.0% of resamples'."""
+    point, low, high = evidence.interval
+    return (f"mean curve {steps_k(point)} [{steps_k(low)}, {steps_k(high)}], "
+            f"reaches in {evidence.share_reaching:.1%} of resamples")
+
+
+def failed(cell_runs) -> str:
+    """'; 1 run failed (not averaged)' where a row has runs stopped as failed, else ''."""
+    n = len(cell_runs.failed)
+    return f"; {n} run{'s' if n != 1 else ''} failed (not averaged)" if n else ""

@@ -10,7 +10,7 @@ from ...intervals import bootstrap, format_interval, median
 from ...verdicts import ABOVE, BELOW, DETAIL, DIRECTION, Part, Row, reaches_threshold, size
 from ..claim import Claim
 from ..runs import Learner
-from ..wording import steps_k
+from ..wording import failed, reaching, steps_k
 
 TEXT = ("DNN: without transfer the threshold is never reached (final <R> ~5); regular transfer with "
         "N=100 reaches it at ~220k (final <R> ~9).")
@@ -39,12 +39,12 @@ def claim_5(learners: dict[str, Learner]) -> Claim:
     if not dnn.runs("none_0") or not dnn.runs("regular_100"):
         return Claim(TEXT, SHORT, SOURCE, SCOPE, all_parts, ["Table IV has no runs of these rows yet."])
     for cell, paper_reaches in (("none_0", False), ("regular_100", True)):
-        ours = dnn.mean_curve_time(cell)
+        ours = dnn.mean_curve_reaching(cell)
         s = dnn.cells[cell].summary(MetricsConfig())
-        reach.rows.append(Row(f"DNN {cell}", steps_k(dnn.paper_time(cell)), f"mean curve {steps_k(ours)}",
-                              reaches_threshold(ours is not None, paper_reaches),
+        reach.rows.append(Row(f"DNN {cell}", steps_k(dnn.paper_time(cell)), reaching(ours),
+                              reaches_threshold(ours.share_reaching, paper_reaches),
                               f"{s['runs_reaching_threshold']} of {s['n_runs']} runs reach it; "
-                              f"{dnn.never_learn(cell)} never learn"))
+                              f"{dnn.never_learn(cell)} never learn{failed(dnn.cells[cell])}"))
     final = {c: bootstrap(np.mean, [r.mean_reward[-1] for r in dnn.runs(c)]) for c in ("none_0", "regular_100")}
     low.rows.append(Row("DNN none_0, mean final <R>", "~5", format_interval(final["none_0"]),
                         size(final["none_0"], 5.0, BELOW, null=None)))

@@ -10,7 +10,7 @@ from ...intervals import bootstrap, format_interval, ratio_of_medians, seeds_to_
 from ...verdicts import ABOVE, BELOW, DETAIL, DIRECTION, Part, Row, direction, reaches_threshold, size
 from ..claim import Claim
 from ..runs import Learner, never_learns
-from ..wording import median_times, ratio_row, steps_k
+from ..wording import failed, median_times, ratio_row, reaching, steps_k
 
 TEXT = ("DNN with scaffolding is slower (~220k -> ~310k) but more robust to N_source (N=50 reaches the "
         "threshold).")
@@ -56,11 +56,11 @@ def claim_6(learners: dict[str, Learner]) -> Claim:
     row, robust.evidence = _robustness(dnn)
     robust.rows.append(row)
     for cell, paper_reaches in (("scaffolded_50", True), ("regular_50", False)):
-        ours_time = dnn.mean_curve_time(cell)
+        ours = dnn.mean_curve_reaching(cell)
         s = dnn.cells[cell].summary(MetricsConfig())
-        example.rows.append(Row(f"DNN {cell}", steps_k(dnn.paper_time(cell)), f"mean curve {steps_k(ours_time)}",
-                                reaches_threshold(ours_time is not None, paper_reaches),
-                                f"{s['runs_reaching_threshold']} of {s['n_runs']} runs reach it"))
+        example.rows.append(Row(f"DNN {cell}", steps_k(dnn.paper_time(cell)), reaching(ours),
+                                reaches_threshold(ours.share_reaching, paper_reaches),
+                                f"{s['runs_reaching_threshold']} of {s['n_runs']} runs reach it{failed(dnn.cells[cell])}"))
     example.evidence = "; ".join(f"{r.label.split()[-1]} {r.ours}" for r in example.rows)
     return Claim(TEXT, SHORT, SOURCE, SCOPE, all_parts, _same_n_source(dnn))
 
