@@ -272,3 +272,16 @@ def test_step_takes_an_action_index_or_refuses_in_one_line(actions):
         assert ENV.observation_space.contains(obs) and reward in (0.0, ENV.config.success_reward)
         if terminated or truncated:
             ENV.reset()
+
+
+@pytest.mark.parametrize("flags", [["-m", "--cfg", "job"], ["--info", "--cfg", "job"]])
+def test_hydra_modes_given_together_are_refused_in_one_line(flags, tmp_path):
+    """Hydra runs one mode (a sweep, printing a config, its info) and refuses two with a
+    traceback; the entry point says which flags clash before anything runs."""
+    from mediated_transfer.app import cli
+
+    with pytest.raises(SystemExit) as stopped:
+        cli([*flags, "scale=smoke", f"paths.root={tmp_path}"])
+    message = str(stopped.value)
+    assert message.startswith("Invalid configuration: ") and "cannot be combined" in message
+    assert "\n" not in message and not list(tmp_path.iterdir())

@@ -72,6 +72,12 @@ def cli(argv: Sequence[str] | None = None) -> Any:
 
 def _cli(args: list[str], parsed, runs: list) -> Any:
     try:
+        modes = [flag for flag, given in (("-m/--multirun", parsed.multirun), ("--cfg", parsed.cfg),
+                                          ("--info", parsed.info), ("--run", parsed.run),
+                                          ("--shell-completion", parsed.shell_completion)) if given]
+        if len(modes) > 1:  # Hydra refuses them together, with a traceback
+            raise ConfigError(f"{' and '.join(modes)} cannot be combined (Hydra runs one mode); "
+                              "e.g. --cfg job without -m prints the config of one job")
         if parsed.config_name or parsed.config_path or parsed.config_dir:
             raise ConfigError("--config-name/--config-path/--config-dir: this entry point composes "
                               "conf/config.yaml; choose an experiment with experiment=<name>")

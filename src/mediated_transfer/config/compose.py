@@ -28,10 +28,8 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from . import schema
+from .conf_dir import CONF_DIR, CONFIG_NAME  # noqa: F401 - read from here by most callers
 
-CONF_DIR = Path(__file__).resolve().parents[3] / "conf"
-"""The config tree; it sits next to src/ (the package is installed in editable mode)."""
-CONFIG_NAME = "config"
 NUMERIC_GROUPS = ("n_source",)
 """Config groups whose options are numbers: their choices are quoted for Hydra."""
 

@@ -22,7 +22,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from .. import plugins
-from .compose import CONF_DIR
+from .conf_dir import CONF_DIR
 from .schema import PYTHON_OPTIONS
 
 GROUP = "tuned"

@@ -9,7 +9,7 @@ same worlds a run of ``env=<name>`` gets.
 from __future__ import annotations
 
 from ..env.config import WorldConfig
-from .compose import CONF_DIR
+from .compose import CONF_DIR, compose_config
 
 
 def env_options() -> list[str]:
@@ -20,6 +20,17 @@ def env_options() -> list[str]:
 def named_world(option: str = "default") -> WorldConfig:
     """The world of ``env=<option>``, composed by Hydra as a run composes it; ConfigError (one
     line, listing the options) for an unknown name."""
-    from ..env.door import world_of_option
-
     return world_of_option(option).config
+
+
+def world_of_option(option: str = "default", overrides=()):
+    """The world of ``env=<option>``, composed by Hydra as a run composes it, with further
+    ``overrides`` (``hydra.searchpath=[pkg://<package>.conf]`` for a plugin's option, env keys);
+    ConfigError (one line, listing the options) for an unknown name."""
+    from omegaconf import OmegaConf
+
+    from ..env.door import build_world, split_option, world_config
+
+    cfg = compose_config([f"env={option}", *overrides])
+    target, values = split_option(OmegaConf.to_container(cfg.env, resolve=True))
+    return build_world(target, world_config(target, values))

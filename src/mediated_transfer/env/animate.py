@@ -123,7 +123,7 @@ def main(argv: list[str] | None = None) -> dict:
     if args.env is not None:
         if args.run is not None:
             parser.error("--run shows the run's learner in the run's world: leave out --env")
-        from .door import world_of_option
+        from ..config.worlds import world_of_option
 
         try:
             world = world_of_option(args.env, args.overrides)

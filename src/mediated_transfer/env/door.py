@@ -68,15 +68,3 @@ def build_world(target: str | None, config):
     (target, config), since a world only describes (its environments are made fresh)."""
     return world_class(target)(world_config(target, config))
 
-
-def world_of_option(option: str = "default", overrides=()):
-    """The world of ``env=<option>``, composed by Hydra as a run composes it, with further
-    ``overrides`` (``hydra.searchpath=[pkg://<package>.conf]`` for a plugin's option, env keys);
-    ConfigError (one line, listing the options) for an unknown name."""
-    from omegaconf import OmegaConf
-
-    from ..config.compose import compose_config
-
-    cfg = compose_config([f"env={option}", *overrides])
-    target, values = split_option(OmegaConf.to_container(cfg.env, resolve=True))
-    return build_world(target, world_config(target, values))

@@ -188,7 +188,7 @@ def _try_plugins(spec: "RunSpec") -> None:
             RunStreams.of(spec)
         if "algorithm" in foreign:
             make_learner(spec.algorithm, spec.representation, spec.algorithm_params, spec.representation_params,
-                         world=spec.world, algorithm_target=spec.algorithm_target,
+                         world=spec.make_world(), algorithm_target=spec.algorithm_target,
                          representation_target_path=spec.representation_target)
     except (ValueError, TypeError) as error:
         raise ConfigError(str(error).strip().splitlines()[0]) from None
