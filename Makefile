@@ -48,7 +48,7 @@ test: $(FULL_STAMP) ## Run the whole test suite (creates .venv with everything f
 test-no-torch: $(STAMP) ## The suite without torch: its tests skip (PYTHON=, EXTRAS=test, VENV= of its own)
 	$(BIN)/python -m pytest -q -n auto
 
-bench: $(STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3
+bench: $(STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3, PPO's environments
 	$(BIN)/python -m mediated_transfer.bench
 
 # After a change of the code runs execute (docs/reliability.md#provenance-and-stale-results).

@@ -60,3 +60,26 @@ def test_the_dqn_probe_starts_timing_after_its_warm_up():
     rbf = run_spec(compose_config(["experiment=table2_rbf", "cell=none_0", "scale=paper"]))
     assert projection.warm_up_steps(dqn) == dqn.algorithm_params["learning_starts"] > 0
     assert projection.warm_up_steps(rbf) == 0
+
+
+def test_the_ppo_table_projection_adds_setup_learning_evaluation_and_the_jobs_overhead():
+    from mediated_transfer.bench import ppo_speed
+
+    p = ppo_speed.project_table(steps_per_s=1000.0, eval_s_per_point=2.0, setup_s=0.5, runs=220, cores=2,
+                                budget=500_000, eval_points=25)
+    run_s = 0.5 + 500.0 + 50.0 + projection.JOB_OVERHEAD_S
+    assert p["run_s"] == pytest.approx(run_s)
+    assert p["cpu_hours"] == pytest.approx(220 * run_s / 3600)
+    assert p["wall_hours"] == pytest.approx(220 * run_s / 2 / 3600)
+
+
+@pytest.mark.slow
+def test_the_ppo_bench_times_k_environments_against_one_in_one_run():
+    pytest.importorskip("stable_baselines3")
+    from mediated_transfer.bench import ppo_speed
+
+    result = ppo_speed.run(steps=2048, ks=(1, 2), rounds=1, verbose=False)
+    assert set(result["by_k"]) == {1, 2} and result["by_k"][1]["ratio_to_k1"] == 1.0
+    assert all(r["steps_per_s"] > 0 for r in result["by_k"].values())
+    assert result["table_runs"] == 220 and set(result["table5"]) == {1}
+    assert result["table5"][1]["wall_hours"] > 0

@@ -15,6 +15,13 @@ The calls, in the order every loop makes them (docs/extending.md, "A learner wit
     over = recorder.checkpoint(lambda: learner)      # evaluation point, progress; True: run over
     recorder.end_episode(terminated)                 # the episode ended (or the run did)
     result = recorder.finish(learner, on_finish)     # once, at the end
+
+A loop that keeps several episodes in flight at once (SB3's vectorised environments, run_sb3.py
+with ``algorithm.n_envs`` > 1) passes each environment's ``slot`` (0, 1, ...) to ``begin``,
+``step`` and ``end_episode``: the run's one strategy still chooses every episode's task, in the
+order the episodes begin, and hears each episode when it ends. Slot 0's environment is seeded
+from the run's env stream as a single loop's is; slot k > 0's from its own stream of the seed.
+A loop of one episode at a time leaves ``slot`` out (slot 0) and computes what it always has.
 """
 
 from __future__ import annotations
@@ -49,6 +56,12 @@ FinishFn = Callable[[Learner], None]
 
 def _stream_seed(seed: int, stream: int) -> int:
     return int(np.random.SeedSequence([seed, stream]).generate_state(1)[0])
+
+
+def _slot_env_seed(seed: int, slot: int) -> int:
+    """Seed of the first reset of the training environment in ``slot`` > 0 (several episodes in
+    flight): a stream of the run's seed of its own, apart from every other."""
+    return int(np.random.SeedSequence([seed, _ENV_STREAM, slot]).generate_state(1)[0])
 
 
 def evaluate(learner: Learner, env, tasks, seed: int) -> tuple[float, float]:
@@ -137,6 +150,17 @@ class Curve:
         return now - self.started
 
 
+class _Episode:
+    """An episode in flight: its environment, its task (None: a target task the environment
+    drew), the learning step it began at, its return, length and summed absolute TD error."""
+
+    __slots__ = ("env", "task", "start", "ret", "length", "td")
+
+    def __init__(self, env, task, start: int):
+        self.env, self.task, self.start = env, task, start
+        self.ret, self.length, self.td = 0.0, 0, 0.0
+
+
 class RunRecorder:
     """One run's bookkeeping (module doc): a loop calls begin, step, checkpoint, end_episode and
     finish; it keeps no count, return, curve or strategy state of its own."""
@@ -163,31 +187,49 @@ class RunRecorder:
         """Learning steps of the run so far."""
         self.source_phase_end: int | None = None
         self.first_target_reward: int | None = None
-        self.in_episode = False
-        self._env_seed: int | None = self.streams.env_seed  # the first episode's reset only
-        self._env = self._task = None
-        self._start, self._return, self._length, self._td = 0, 0.0, 0, 0.0
+        self._episodes: list[_Episode | None] = [None]
+        """The episode in flight in each slot (module doc); None where none is."""
+        self._seeded: set[int] = set()
+        """Slots whose environment's first reset has been seeded."""
+
+    @property
+    def in_episode(self) -> bool:
+        """An episode is in flight (in any slot)."""
+        episodes = self._episodes
+        return episodes[0] is not None if len(episodes) == 1 else any(e is not None for e in episodes)
+
+    def in_flight(self, slot: int = 0) -> bool:
+        """An episode is in flight in ``slot``."""
+        return slot < len(self._episodes) and self._episodes[slot] is not None
 
     @property
     def over(self) -> bool:
         """The run has spent its budget, or failed."""
         return self.steps >= self.spec.budget or self.curve.failure is not None
 
-    def begin(self, env) -> tuple:
-        """Start an episode on ``env`` (a target-scenario environment of the run's world): the strategy's next task, or a target task. Returns (observation, info)."""
-        observation, info, self._task = start_episode(env, self.strategy, self._env_seed)
-        self._env, self._env_seed, self.in_episode = env, None, True
-        self._start, self._return, self._length, self._td = self.steps, 0.0, 0, 0.0
+    def begin(self, env, slot: int = 0) -> tuple:
+        """Start an episode on ``env`` (a target-scenario environment of the run's world) in
+        ``slot``: the strategy's next task, or a target task. Returns (observation, info)."""
+        if slot in self._seeded:
+            seed = None
+        else:  # the first episode's reset of this slot's environment only
+            seed = self.streams.env_seed if slot == 0 else _slot_env_seed(self.spec.seed, slot)
+            self._seeded.add(slot)
+        observation, info, task = start_episode(env, self.strategy, seed)
+        while len(self._episodes) <= slot:
+            self._episodes.append(None)
+        self._episodes[slot] = _Episode(env, task, self.steps)
         return observation, info
 
-    def step(self, reward: float, td_error: float | None = None) -> None:
-        """One learning step of the current episode, with its reward (and TD error, if asked for)."""
+    def step(self, reward: float, td_error: float | None = None, slot: int = 0) -> None:
+        """One learning step of the episode in ``slot``, with its reward (and TD error, if asked for)."""
         self.steps += 1
-        self._return += reward
-        self._length += 1
+        episode = self._episodes[slot]
+        episode.ret += reward
+        episode.length += 1
         if td_error is not None:
-            self._td += abs(td_error)
-        if reward > 0 and self._task is None and self.first_target_reward is None:
+            episode.td += abs(td_error)
+        if reward > 0 and episode.task is None and self.first_target_reward is None:
             self.first_target_reward = self.steps
 
     def checkpoint(self, learner: Callable[[], Learner]) -> bool:
@@ -206,24 +248,26 @@ class RunRecorder:
             self.progress(step, self.spec.budget)
         return self.over
 
-    def end_episode(self, solved: bool) -> None:
-        """The current episode ended: in the goal (``solved``), at its step limit, or with the
-        run. Records its choice and reports it to the strategy with every signal."""
-        task, env = self._task, self._env
-        distance = (env.unwrapped.task if task is None else task).target_distance
-        self.choices.add(self._start, task is None, distance, bool(solved))
+    def end_episode(self, solved: bool, slot: int = 0) -> None:
+        """The episode in ``slot`` ended: in the goal (``solved``), at its step limit, or with
+        the run. Records its choice and reports it to the strategy with every signal."""
+        episode = self._episodes[slot]
+        task = episode.task
+        distance = (episode.env.unwrapped.task if task is None else task).target_distance
+        self.choices.add(episode.start, task is None, distance, bool(solved))
         was_done = self.strategy.done
-        self.strategy.report(EpisodeOutcome(task, bool(solved), self._return, self._length, self.steps,
-                                            self._td / self._length if self.wants_td_error else None))
+        self.strategy.report(EpisodeOutcome(task, bool(solved), episode.ret, episode.length, self.steps,
+                                            episode.td / episode.length if self.wants_td_error else None))
         if not was_done and self.strategy.done:
             self.source_phase_end = self.steps
-        self.in_episode = False
+        self._episodes[slot] = None
 
     def finish(self, learner: Learner, on_finish: FinishFn | None = None) -> RunResult:
         """The run's result, once its loop has stopped (``on_finish`` sees the trained learner).
-        An episode still open with steps in it ends with the run, unsolved."""
-        if self.in_episode and self._length:
-            self.end_episode(False)
+        An episode still open with steps in it ends with the run, unsolved (several: in slot order)."""
+        for slot, episode in enumerate(self._episodes):
+            if episode is not None and episode.length:
+                self.end_episode(False, slot)
         wall = self.curve.stop()
         if on_finish is not None:
             on_finish(learner)

@@ -154,6 +154,12 @@ class RunSpec:
         target = self.strategy_class()
         plugins.check_interface("strategy", target, METHODS, "strategy")
         plugins.check_parameters("strategy", target, self.strategy_params, ("context",))
+        n_envs = self.algorithm_params.get("n_envs", 1)
+        if n_envs != 1 and not hasattr(plugins.owner_class(target), "max_in_flight"):
+            # Several environments (run_sb3.py): episodes begin before earlier ones are reported.
+            raise ValueError(f"algorithm.n_envs={n_envs} keeps {n_envs} episodes in flight, but "
+                             f"strategy={self.strategy} hears one episode at a time (it has no "
+                             "max_in_flight); use algorithm.n_envs=1, or strategy=none, regular, scaffolded")
         signals = tuple(getattr(plugins.owner_class(target), "signals", ()) or ())
         if "td_error" in signals:  # only the project's own loop computes them (the learner's td_error)
             learner = plugins.owner_class(learner_target(self.algorithm, self.algorithm_target))

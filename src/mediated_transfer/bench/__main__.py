@@ -7,6 +7,8 @@ Ratios, not absolute times, are the targets (they survive a slower or busier mac
   lockstep: a tuned DQN step's breakdown; steps/s per network of K runs stepped together
           (CPU group, stacked networks) / single runs                      (aim >= 3)
   startup: a finished sweep run again (a skip), seconds and / computing it  (aim < 1.5 s)
+  ppo:    SB3 PPO learning steps/s with K environments (algorithm.n_envs) / with one, and
+          Table V's (PPO) projected wall time on this machine's cores
 """
 
 from __future__ import annotations
@@ -23,8 +25,10 @@ PARTS = {
     "lockstep": "mediated_transfer.bench.lockstep_speed",
     "projection": "mediated_transfer.bench.projection",
     "startup": "mediated_transfer.bench.startup_speed",
+    "ppo": "mediated_transfer.bench.ppo_speed",
 }
-DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 2_000, "projection": None, "startup": 5}
+DEFAULT_STEPS = {"env": 20_000, "linear": 20_000, "dqn": 5_000, "lockstep": 2_000, "projection": None, "startup": 5,
+                 "ppo": 3 * 2048}
 
 
 def main(argv: list[str] | None = None) -> int:

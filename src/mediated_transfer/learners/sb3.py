@@ -36,6 +36,8 @@ NUM_ACTIONS = len(PICKING_LOCATIONS) + 6  # 5 picks, 4 moves, 2 rotations
 ACTIVATIONS = ("tanh", "relu")
 MAX_TORCH_THREADS = 1024
 """torch refuses absurd thread counts only when the learner is built; refuse them up front."""
+MAX_ENVS = 256
+"""Most PPO training environments in one run: each is a physics world in the run's process."""
 MAX_WIDTH = 1 << 20
 """Widest hidden layer accepted: a wider one could not be allocated (checked before memory)."""
 
@@ -82,15 +84,26 @@ class SB3PPOConfig:
     """Activation of the hidden layers: tanh (SB3's default for PPO) or relu."""
     torch_threads: int = 1
     """torch intra-op threads (process-wide); 1 because runs are parallelised across processes."""
+    n_envs: int = 1
+    """Training environments stepped together (SB3's DummyVecEnv, one process), each episode's
+    task chosen by the run's one strategy (run_sb3.py); a rollout is ``n_steps`` x ``n_envs``
+    learning steps. Default 1: one episode at a time, as the paper's learners learn and as every
+    PPO run committed so far computed (their results and fingerprints stay valid). More is
+    faster (the policy acts for all environments in one forward pass); see run_sb3.py for what
+    it changes."""
 
     def __post_init__(self) -> None:
         _check_common(self)
         _check_ints(self, ("n_steps", "n_epochs"), low=1)
+        if isinstance(self.n_envs, bool) or not isinstance(self.n_envs, int) or not 1 <= self.n_envs <= MAX_ENVS:
+            _fail(self, "n_envs", f"an integer in [1, {MAX_ENVS}]")
         # SB3 normalises advantages over a minibatch: one sample has no spread.
         _check_ints(self, ("batch_size",), low=2)
-        if self.batch_size > self.n_steps:
-            raise ValueError(f"algorithm.batch_size ({self.batch_size}) must be <= algorithm.n_steps "
-                             f"({self.n_steps}): a minibatch is drawn from one rollout")
+        if self.batch_size > self.n_steps * self.n_envs:
+            rollout = (f"algorithm.n_steps ({self.n_steps})" if self.n_envs == 1 else
+                       f"algorithm.n_steps x algorithm.n_envs ({self.n_steps} x {self.n_envs})")
+            raise ValueError(f"algorithm.batch_size ({self.batch_size}) must be <= {rollout}: "
+                             "a minibatch is drawn from one rollout")
         if not 0.0 <= self.gae_lambda <= 1.0:
             _fail(self, "gae_lambda", "in [0, 1]")
         for key in ("clip_range", "max_grad_norm"):
@@ -214,7 +227,7 @@ def memory_bytes(algorithm: str, config, num_inputs: int) -> int:
     if algorithm == "sb3_ppo":
         # A policy and a value network of about that size; float32 weights, gradient and
         # Adam's two moments of each. The rollout: float64 sensor vectors and a few floats.
-        total = 2 * 4 * 4 * params + config.n_steps * (8 * OBSERVATION_SIZE + 6 * 4)
+        total = 2 * 4 * 4 * params + config.n_steps * config.n_envs * (8 * OBSERVATION_SIZE + 6 * 4)
     else:
         # The Q-network and its target copy, the gradient and Adam's two moments; SB3's replay
         # buffer: float64 sensor vectors (observation and next), an int64 action, a float32

@@ -8,7 +8,8 @@ a user's strategy (transfer/strategy.py, conf/strategy/*.yaml).
   then a random solved task k and the unsolved task most similar to k by the cosine
   similarity of their sensor vectors (eq. 3). Solved tasks move from C to C_solved.
 
-Each is done once C is empty; target-task episodes' outcomes change nothing.
+Each is done once C is empty; target-task episodes' outcomes change nothing. Each accepts several
+episodes in flight (``max_in_flight``, set by a loop of several environments).
 """
 
 from __future__ import annotations
@@ -26,6 +27,11 @@ class _SourcePhase:
 
     name = ""
     source_tasks = "required"  # a transfer strategy without C would be "none" under another name
+    max_in_flight = 1
+    """Episodes handed out (``next_task``) and not yet reported that the strategy accepts: 1 for
+    a loop of one episode at a time; a loop of K environments (run_sb3.py, ``algorithm.n_envs``)
+    sets K. Each report then names its episode by its task (``outcome.task``); a task solved in
+    one episode leaves C once, whichever other episode of it is still in flight."""
 
     def __init__(self, context: StrategyContext):
         rng = context.rng
@@ -39,7 +45,8 @@ class _SourcePhase:
         # Unsolved task indices in ascending order: C. A list, because removal happens once
         # per solved task while sampling happens every episode.
         self._unsolved = list(range(len(self.tasks)))
-        self._pending: int | None = None
+        self._pending: list[int] = []
+        """Tasks handed out and not yet reported, in the order handed out."""
         # C lives in the process that made it: a copy in another process (a subprocess vector
         # env's worker) would run a curriculum of its own. TransferWrapper refuses that.
         self.owner_pid = os.getpid()
@@ -63,22 +70,30 @@ class _SourcePhase:
         return len(self._unsolved)
 
     def next_task(self) -> Task | None:
-        if self._pending is not None:
+        if len(self._pending) >= self.max_in_flight:
             raise RuntimeError(
                 f"{self.name}: next_task() called twice without report() on the first task"
+                if self.max_in_flight == 1 else
+                f"{self.name}: next_task() with {len(self._pending)} episodes in flight (max_in_flight)"
             )
         if not self._unsolved:
             return None
-        self._pending = self._choose()
-        return self.tasks[self._pending]
+        index = self._choose()
+        self._pending.append(index)
+        return self.tasks[index]
 
     def report(self, outcome: EpisodeOutcome) -> None:
         if outcome.task is None:  # a target-task episode: C does not change
             return
-        if self._pending is None:
+        pending = self._pending
+        # One in flight: it is that one (as a loop of one episode at a time has always reported).
+        at = 0 if len(pending) == 1 else next(
+            (j for j, i in enumerate(pending) if self.tasks[i] is outcome.task), None)
+        if at is None:
             raise RuntimeError(f"{self.name}: report() of a source task that next_task() did not hand out")
-        index, self._pending = self._pending, None
-        if outcome.solved:
+        index = pending.pop(at)
+        # Solved once: with several episodes in flight, two may have learned the same task.
+        if outcome.solved and index in self._unsolved:
             self._unsolved.remove(index)
             self._solved(index)
 
@@ -95,6 +110,8 @@ class NoTransfer:
 
     name = "none"
     source_tasks = "none"
+    max_in_flight = 1
+    """Any number of target-task episodes may be in flight (a loop of K environments sets K)."""
     done = True
     solved_count = 0
     remaining = 0

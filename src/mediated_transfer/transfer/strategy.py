@@ -15,8 +15,10 @@ The run loop calls ``_target_(context=StrategyContext, **parameters)`` once per 
   absolute TD error, from learners that offer ``td_error``).
 
 Optional attributes: ``solved_count`` (source tasks solved, recorded in result.json),
-``source_tasks`` ("required": N_source >= 1, "none": N_source = 0, "optional", the default)
-and ``signals``. Learning never stops between the phases: a strategy only decides which task
+``source_tasks`` ("required": N_source >= 1, "none": N_source = 0, "optional", the default),
+``signals`` and ``max_in_flight`` (settable; a strategy that has it accepts that many episodes
+handed out and not yet reported, each report naming its episode by ``outcome.task``: a loop of
+K environments, PPO's ``algorithm.n_envs``, sets it to K; one without it runs one at a time). Learning never stops between the phases: a strategy only decides which task
 each episode starts from.
 """
 

@@ -1,0 +1,138 @@
+"""PPO's speed through the run loop: learning steps/s with K training environments
+(``algorithm.n_envs``, run_sb3.py) against one, and the projected wall time of Table V (PPO).
+
+Each run is a real one: SB3 PPO (provisional values, representation network) on the paper's
+world with regular transfer (row ``regular_50``, its source phase included), through the run
+loop and its recorder, as a table's run goes. Every K keeps SB3's default rollout of 2,048
+learning steps (``n_steps`` = 2048 / K per environment), so that K changes how a rollout is
+collected, not how much each update learns from. The runs of every K alternate, round by round,
+in this one process, so the machine's load hits them alike; a run's rate is timed over whole
+rollouts (collection and update) after its first, and the ratio to K = 1 is taken per round
+(medians are reported).
+
+Table V is projected as projection.py projects Tables II-IV: its rows x seeds (those of
+Table IV: 11 rows x 20 seeds at the paper's scale), each run ``setup + budget / (steps/s) +
+eval_points x (s per evaluation point) + job overhead``, divided by this machine's cores (one run
+per core). The evaluation point is timed once (100 target-task episodes of a barely trained
+policy, which mostly run to their step limit: an upper bound).
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import time
+from dataclasses import replace
+
+from .projection import JOB_OVERHEAD_S
+
+KS = (1, 2, 4, 8, 16)
+"""Numbers of environments compared (each divides the rollout)."""
+RECOMMENDED_K = 8
+"""The K the bench projects Table V with: it takes the collection from ~400 to ~70 us per learning
+step, nearly all that more environments give (the rest is PPO's update, ~80 % of a K = 8 run),
+with rollouts of 256 steps per environment (several whole episodes) and at most 7 episodes in
+flight at the hand-over (docs/benchmarks.md, "PPO with several environments")."""
+ROLLOUT = 2048
+"""Learning steps per rollout, every K (SB3's default n_steps with one environment)."""
+CELL = "regular_50"
+TABLE = "table4_dnn"
+"""Table V has Table IV's rows and seeds (the DNN's sensor vector, PPO as its learner)."""
+PROBE_SEED = 10_000
+"""Not a table seed (0-19) nor a tuning seed (1000-1009): the probe measures speed only."""
+ROUNDS = 3
+
+
+def _spec(n_envs: int, rollouts: int, eval_episodes: int):
+    from ..config.compose import compose_config
+    from ..config.spec import run_spec
+
+    cfg = compose_config([f"experiment={TABLE}", "algorithm=sb3_ppo", f"cell={CELL}", "scale=paper",
+                          f"seed={PROBE_SEED}", "tracking=none",
+                          f"algorithm.n_envs={n_envs}", f"algorithm.n_steps={ROLLOUT // n_envs}"])
+    paper = run_spec(cfg)
+    # Marks at every rollout's end; the run stops half a rollout after the last timed one.
+    budget = (rollouts + 1) * ROLLOUT + ROLLOUT // 2
+    return paper, replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes)
+
+
+def measure(n_envs: int, rollouts: int, eval_episodes: int = 1) -> dict:
+    """One short run with ``n_envs`` environments: its learning steps/s over ``rollouts`` whole
+    rollouts after the first, and the seconds of its one evaluation point."""
+    from ..run import execute_run
+    from ..transfer.source_tasks import precompute_source_task_sets
+
+    paper, spec = _spec(n_envs, rollouts, eval_episodes)
+    if spec.n_source and spec.cache_dir is not None:  # the sweep clusters C once, before its runs
+        precompute_source_task_sets({spec.n_source}, spec.world, spec.source_pool_size,
+                                    spec.source_set_seed, cache_dir=spec.cache_dir)
+    marks: dict[int, float] = {}
+
+    def mark(step: int, _budget: int) -> None:
+        marks[step] = time.perf_counter()
+
+    start = time.perf_counter()
+    result = execute_run(spec, progress=mark, progress_every=ROLLOUT)
+    total = time.perf_counter() - start
+    first, last = ROLLOUT, (rollouts + 1) * ROLLOUT
+    learn = spec.budget / result.learning_steps_per_s
+    return {"n_envs": n_envs, "steps_per_s": (last - first) / (marks[last] - marks[first]),
+            "eval_s_per_point": result.wall_time_s - learn, "setup_s": total - result.wall_time_s,
+            "paper_budget": paper.budget, "paper_eval_points": paper.eval_points,
+            "source_phase_end": result.source_phase_end}
+
+
+def project_table(steps_per_s: float, eval_s_per_point: float, setup_s: float, runs: int, cores: int,
+                  budget: int, eval_points: int) -> dict:
+    """Table V's projected CPU and wall hours on ``cores`` (one run per core)."""
+    run_s = setup_s + budget / steps_per_s + eval_points * eval_s_per_point + JOB_OVERHEAD_S
+    return {"run_s": run_s, "cpu_hours": runs * run_s / 3600, "wall_hours": runs * run_s / cores / 3600}
+
+
+def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS, cores: int | None = None,
+        verbose: bool = True) -> dict:
+    """``steps``: learning steps timed per run (whole rollouts of 2,048; default 3 rollouts)."""
+    from .projection import table_rows
+
+    rollouts = max(1, (steps or 3 * ROLLOUT) // ROLLOUT)
+    cores = cores or len(os.sched_getaffinity(0))
+    cells, seeds = table_rows(TABLE)
+    table_runs = len(cells) * seeds
+    if verbose:
+        print(f"PPO ({CELL}, paper world, provisional values, rollout {ROLLOUT}): {rounds} rounds of "
+              f"{rollouts} timed rollouts per K in {', '.join(map(str, ks))}...", flush=True)
+    per_round: list[dict[int, dict]] = []
+    evaluation = measure(1, 1, eval_episodes=100)  # one paper-sized evaluation point
+    for _ in range(rounds):
+        per_round.append({k: measure(k, rollouts) for k in ks})
+    base = ks[0]
+    result: dict = {"cores": cores, "rollout": ROLLOUT, "cell": CELL, "rounds": rounds, "by_k": {}}
+    for k in ks:
+        rates = [r[k]["steps_per_s"] for r in per_round]
+        ratios = [r[k]["steps_per_s"] / r[base]["steps_per_s"] for r in per_round]
+        result["by_k"][k] = {"steps_per_s": statistics.median(rates), "ratio_to_k1": statistics.median(ratios),
+                             "ratios": ratios}
+    setup = statistics.median(r[base]["setup_s"] for r in per_round)
+    projected = {}
+    for k in sorted({base, RECOMMENDED_K} & set(ks)):
+        # K = 1's rate times K's ratio (taken pair by pair, it is the steadier figure under load).
+        rate = result["by_k"][base]["steps_per_s"] * result["by_k"][k]["ratio_to_k1"]
+        projected[k] = project_table(rate, evaluation["eval_s_per_point"], setup,
+                                     table_runs, cores, evaluation["paper_budget"],
+                                     evaluation["paper_eval_points"])
+    result.update({"eval_s_per_point": evaluation["eval_s_per_point"], "table_runs": table_runs,
+                   "recommended_k": RECOMMENDED_K, "table5": projected})
+    if verbose:
+        for k in ks:
+            r = result["by_k"][k]
+            print(f"  n_envs={k:>2}: {r['steps_per_s']:,.0f} learning steps/s, x{r['ratio_to_k1']:.2f} vs n_envs={base} "
+                  f"(per round: {', '.join(f'{x:.2f}' for x in r['ratios'])})", flush=True)
+        print(f"  an evaluation point (100 episodes): {evaluation['eval_s_per_point']:.1f} s", flush=True)
+        for k, p in projected.items():
+            print(f"  Table V ({table_runs} paper-scale runs) with n_envs={k}: a run ~{p['run_s']:.0f} s -> "
+                  f"{p['cpu_hours']:.1f} CPU-h, {p['wall_hours']:.1f} h on {cores} cores", flush=True)
+    return result
+
+
+if __name__ == "__main__":
+    run()
