@@ -1,5 +1,7 @@
 """Rendering as in the paper's Figure 1, the GIF command, and the speed benchmark's report."""
 
+import math
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -71,6 +73,8 @@ def test_env_speed_reports_speed_and_overhead(capsys):
     # A short learning run: its episodes replay bit for bit (checked inside) and are timed.
     result = env_speed.run(steps=400, rounds=2, learn_steps=1_000)
     for prefix in ("", "random_"):
-        assert result[f"{prefix}steps_per_second"] > 0 and result[f"{prefix}overhead"] > 0
+        # The overhead is a difference of two timings: a busy machine can make it negative, so
+        # the test asks for a measured number, and make bench for its size.
+        assert result[f"{prefix}steps_per_second"] > 0 and math.isfinite(result[f"{prefix}overhead"])
         assert 0 < result[f"{prefix}physics_calls_per_step"] <= WorldConfig().substeps
     assert "overhead" in capsys.readouterr().out
