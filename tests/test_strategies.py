@@ -5,6 +5,7 @@ import pytest
 
 from mediated_transfer.config.targets import group_options
 from mediated_transfer.env import Task
+from mediated_transfer.env.paper import PaperWorld
 from mediated_transfer.transfer import EpisodeOutcome, Strategy, StrategyContext, make_strategy
 from mediated_transfer.transfer.strategies import NoTransfer, RegularTransfer, ScaffoldedTransfer
 
@@ -257,3 +258,38 @@ def test_the_task_space_spans_source_to_target_distances():
         assert low - 1e-9 <= task.target_distance <= high + 1e-9
     with pytest.raises(ValueError, match="outside the task space"):
         space.sample(generator, 14.0)
+
+
+class _NearSpace:
+    """A task space whose tasks all lie 5 to 6 from O (the paper's sampling within it)."""
+
+    def __init__(self, config):
+        from mediated_transfer.env.task_space import TaskSpace
+
+        self.paper = TaskSpace(config)
+        self.distances, self.target_distances, self.reach = (5.0, 6.0), (10.5, 12.5), 10.0
+
+    def sample(self, generator, distance):
+        return self.paper.sample(generator, distance)
+
+
+class NearWorld(PaperWorld):
+    """The paper's world with a task space of its own (a plugin world's, env/door.py)."""
+
+    @property
+    def task_space(self):
+        return _NearSpace(self.config)
+
+
+def test_a_curriculum_moves_over_the_run_world_s_task_space():
+    from auto_curricula.domain_randomisation import DomainRandomisation
+    from mediated_transfer.recorder import RunStreams
+    from mediated_transfer.run import RunSpec
+
+    spec = RunSpec(strategy="dr", strategy_target="auto_curricula.domain_randomisation.DomainRandomisation",
+                   world_target=f"{__name__}.NearWorld", budget=100, eval_points=1, eval_episodes=1).validate()
+    # The run's loop, and a strategy built from Python with the world.
+    for strategy in (RunStreams.of(spec).strategy,
+                     DomainRandomisation(StrategyContext.of_tasks([], rng(0), spec.make_world()))):
+        assert isinstance(strategy.space, _NearSpace)
+        assert all(5.0 - 1e-9 <= strategy.next_task().target_distance <= 6.0 + 1e-9 for _ in range(5))

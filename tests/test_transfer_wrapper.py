@@ -3,6 +3,8 @@ drives the strategy objects; inside a synchronous vector env; refused where it c
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import gymnasium
 import numpy as np
 import pytest
@@ -115,10 +117,25 @@ def test_it_wraps_the_registered_environment_and_refuses_what_it_cannot_drive():
         wrapped.reset(options={"task": SOURCE_TASKS[0]})
     with pytest.raises(ValueError, match="scenario 'target'"):
         TransferWrapper(MediatedInteractionEnv("source"), strategy("regular"))
-    with pytest.raises(ValueError, match="wraps a MediatedInteractionEnv"):
+    with pytest.raises(ValueError, match="wraps an environment of the world PaperWorld"):
         TransferWrapper(gymnasium.make("CartPole-v1"), strategy("regular"))
     with pytest.raises(ValueError, match="transfer strategy"):
         TransferWrapper(MediatedInteractionEnv("target"), "regular")
+
+
+def test_it_wraps_any_world_s_environment(monkeypatch):
+    """A plugin world (the extra-sensor example, 12 sensors): the wrapper checks the environment
+    against the world it is given, and starts the strategy's tasks through the world's reset."""
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "examples" / "worlds"))
+    from my_worlds.sensor import TargetDistanceWorld
+
+    world = TargetDistanceWorld()
+    with pytest.raises(ValueError, match="observations of 11 sensors.*observation shape \\(12,\\)"):
+        TransferWrapper(world.make_env("target"), strategy("regular"))  # the paper's world by default
+    env = TransferWrapper(world.make_env("target"), strategy("regular"), world=world)
+    observation, info = env.reset(seed=0)
+    assert observation.shape == (world.sensors.size,) and info["source_phase"]
+    assert env.unwrapped.task in SOURCE_TASKS
 
 
 def _tasks_in_sync_vector_env(strategies, steps=400):

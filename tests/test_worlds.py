@@ -16,6 +16,8 @@ import pytest
 from mediated_transfer.config.compose import ConfigError, compose_config
 from mediated_transfer.config.spec import comparable, run_spec, spec_from_dict
 
+from .optional import needs_deep
+
 REPO = Path(__file__).resolve().parents[1]
 WORLDS = REPO / "examples" / "worlds"
 SEARCHPATH = "hydra.searchpath=[pkg://my_worlds.conf]"
@@ -87,3 +89,34 @@ def test_a_bad_key_of_a_plugin_world_is_one_line_before_any_work(tmp_path):
     ran = _cli(tmp_path, "env=rake", "env.rake_head_length=-1")
     assert "env.rake_head_length must be > 0, got -1" in ran.stderr, ran.stderr[-1500:]
     assert not (tmp_path / "runs").exists()
+
+
+@needs_deep
+def test_the_dqn_and_its_stacked_form_take_the_extra_sensor_world_s_layout(monkeypatch):
+    """The deep Q-network reads the world's sensors (7 distances, then the 5-dim one-hot), in a
+    single run, and stacked in a lockstep group; the memory estimate counts its replay rows."""
+    from mediated_transfer.learners.dqn import DQNConfig
+    from mediated_transfer.learners.factory import make_learner, memory_bytes, validate_learner_choice
+    from mediated_transfer.lockstep.run import execute_lockstep
+    from mediated_transfer.lockstep.stacked import StackedDQN
+    from mediated_transfer.run import RunSpec, RunStreams, execute_run
+
+    monkeypatch.syspath_prepend(str(WORLDS))
+    params = {"hidden_size": 16, "num_hidden_layers": 2, "learning_starts": 64, "buffer_size": 300,
+              "target_update_interval": 50, "epsilon_decay_steps": 200}
+    specs = [RunSpec(algorithm="dqn", representation="network", strategy="regular", n_source=1, seed=seed,
+                     budget=600, eval_points=3, eval_episodes=2, source_pool_size=50, algorithm_params=params,
+                     world_target="my_worlds.sensor.TargetDistanceWorld").validate() for seed in (0, 1)]
+    world = specs[0].make_world()
+    assert world.sensors.num_distances == 7 and world.sensors.size == 12
+    learner = make_learner("dqn", "network", params, world=world)
+    assert learner.network.shapes[0] == (16, 7) and learner.network.shapes[-1] == (11, 16 + 5)
+    assert learner.buffer.WIDTH == 2 * 12 + 3
+    config, _ = validate_learner_choice("dqn", "network", params, {})
+    assert memory_bytes("dqn", config, None, world) > memory_bytes("dqn", config, None)  # wider rows
+    result = execute_run(specs[0])
+    assert result.failure is None and len(result.mean_reward) == 3 and result.learner_stats["updates"] > 0
+    group = StackedDQN(DQNConfig(**params), [RunStreams.of(s).learner_seed for s in specs],
+                       num_actions=world.num_actions, sensors=world.sensors)
+    for lock in execute_lockstep(specs, group=group):
+        assert lock.failure is None and len(lock.mean_reward) == 3 and lock.learner_stats["updates"] > 0

@@ -99,7 +99,7 @@ class RunStreams:
         world = spec.world
         context = StrategyContext(
             rng=np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)), world=world,
-            n_source=spec.n_source,
+            n_source=spec.n_source, task_space=spec.make_world().task_space,
             build_source_tasks=lambda: source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
                                                        seed=spec.source_set_seed, cache_dir=spec.cache_dir))
         strategy = plugins.call(spec.strategy_class(), spec.strategy_params, context=context)

@@ -79,7 +79,7 @@ class RunSpec:
                       ("env", None, asdict(self.world)),
                       ("", None, {"threshold": self.threshold})))
         check_learner(self.algorithm, self.representation, self.algorithm_params, self.representation_params,
-                      self.algorithm_target, self.representation_target)
+                      self.algorithm_target, self.representation_target, world)
         self._check_strategy()
         # Values from Python or a recorded result.json are not typed by Hydra: check them here.
         for key in ("seed", "n_source", "budget", "eval_points", "eval_episodes",

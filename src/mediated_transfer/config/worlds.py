@@ -27,10 +27,14 @@ def world_of_option(option: str = "default", overrides=()):
     """The world of ``env=<option>``, composed by Hydra as a run composes it, with further
     ``overrides`` (``hydra.searchpath=[pkg://<package>.conf]`` for a plugin's option, env keys);
     ConfigError (one line, listing the options) for an unknown name."""
+    return world_of_config(compose_config([f"env={option}", *overrides]))
+
+
+def world_of_config(cfg):
+    """The world of a composed config's ``env`` node (a study's, a run's), built by the door."""
     from omegaconf import OmegaConf
 
     from ..env.door import build_world, split_option, world_config
 
-    cfg = compose_config([f"env={option}", *overrides])
     target, values = split_option(OmegaConf.to_container(cfg.env, resolve=True))
     return build_world(target, world_config(target, values))

@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from ..env.task_space import TaskSpace
+from ..config.worlds import world_of_config
 from ..reporting.formats import write_csv
 from ..reporting.intervals import format_interval
 from ..studies import Written, added_in
@@ -118,7 +118,7 @@ def report(study: Study, measured: Measured, reports_dir: Path) -> Written:
         stem = group.lower().replace(", ", "_")
         paths += [write_csv(part[k], out_dir / f"curricula_{stem}{suffix}.csv")
                   for k, suffix in (("measures", ""), ("q1", "_q1"), ("q2", "_q2")) if not part[k].empty]
-    space = TaskSpace()
+    space = world_of_config(cfg).task_space  # the study's world: its reach and target annulus
     paths.append(plot_curves(runs, float(cfg.threshold), float(cfg.env.success_reward),
                              out_dir / "curricula_curves.png"))
     paths.append(plot_choices(runs, space.reach, space.target_distances, out_dir / "curricula_choices.png"))

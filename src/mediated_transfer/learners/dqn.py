@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ..env.sensors import PAPER_SENSORS, Sensors
 from ..env.task import OBSERVATION_SIZE
 from ..mapping import config_from_mapping
 from .dqn_config import (KERNELS, MAX_TORCH_THREADS, NUM_BINARY, DQNConfig, forward_flops, layer_shapes,
@@ -39,9 +40,10 @@ __all__ = ["KERNELS", "MAX_TORCH_THREADS", "NUM_BINARY", "DQNConfig", "DQNLearne
 # --------------------------------------------------------------------------------------------
 class ReplayBuffer:
     """Ring buffer of the last E transitions, one float32 row each, so that sampling a batch is
-    a single gather: [observation (11) | action | reward | next observation (11) | bootstrap],
+    a single gather: [observation (n) | action | reward | next observation (n) | bootstrap],
     bootstrap being 1 unless the next state is terminal (then the TD target has no bootstrap
-    term)."""
+    term). n is the world's sensor vector's size (``observation_size``; the paper's: 11, the
+    class attributes' layout)."""
 
     OBSERVATION = slice(0, OBSERVATION_SIZE)
     ACTION = OBSERVATION_SIZE
@@ -50,7 +52,16 @@ class ReplayBuffer:
     BOOTSTRAP = 2 * OBSERVATION_SIZE + 2
     WIDTH = 2 * OBSERVATION_SIZE + 3
 
-    def __init__(self, capacity: int, batch_size: int):
+    @staticmethod
+    def layout(observation_size: int) -> dict:
+        """The row's slots for observations of ``observation_size`` entries."""
+        n = observation_size
+        return {"OBSERVATION": slice(0, n), "ACTION": n, "REWARD": n + 1,
+                "NEXT_OBSERVATION": slice(n + 2, 2 * n + 2), "BOOTSTRAP": 2 * n + 2, "WIDTH": 2 * n + 3}
+
+    def __init__(self, capacity: int, batch_size: int, observation_size: int = OBSERVATION_SIZE):
+        if observation_size != OBSERVATION_SIZE:  # another world's sensor vector: its own slots
+            self.__dict__.update(self.layout(observation_size))
         self.capacity, self.size, self.position = capacity, 0, 0
         self.transitions = np.zeros((capacity, self.WIDTH), np.float32)
         # One batch, reused by every sample; the torch views share its memory.
@@ -168,20 +179,23 @@ class DQNLearner:
 
     @classmethod
     def from_params(cls, *, representation=None, num_actions: int, seed: int, world=None, **params) -> "DQNLearner":
-        """``algorithm=dqn``'s ``_target_``: the learner of the group's keys."""
-        return cls(config_from_mapping(DQNConfig, params, "algorithm"), num_actions, seed)
+        """``algorithm=dqn``'s ``_target_``: the learner of the group's keys, for the world's
+        sensor layout (None: the paper's)."""
+        sensors = getattr(world, "sensors", PAPER_SENSORS)
+        return cls(config_from_mapping(DQNConfig, params, "algorithm"), num_actions, seed, sensors)
 
-    def __init__(self, config: DQNConfig | None = None, num_actions: int = 11, seed: int = 0):
+    def __init__(self, config: DQNConfig | None = None, num_actions: int = 11, seed: int = 0,
+                 sensors: Sensors = PAPER_SENSORS):
         self.config = config = config if config is not None else DQNConfig()
         if isinstance(num_actions, bool) or not isinstance(num_actions, int) or num_actions < 1:
             raise ValueError(f"num_actions must be an integer >= 1, got {num_actions!r}")
-        self.num_actions = num_actions
+        self.num_actions, self.sensors = num_actions, sensors
         torch.set_num_threads(config.torch_threads)
         self.rng = np.random.default_rng(seed)
         init = torch.Generator().manual_seed(seed)
-        self.network = QNetwork(config.hidden_size, config.num_hidden_layers, num_actions, init)
+        self.network = QNetwork(config.hidden_size, config.num_hidden_layers, num_actions, init, sensors)
         self.target_network = copy.deepcopy(self.network)
-        self.buffer = ReplayBuffer(config.buffer_size, config.batch_size)
+        self.buffer = ReplayBuffer(config.buffer_size, config.batch_size, sensors.size)
         if config.kernels == "fast":
             from .dqn_kernels import FastGreedyPolicy, FastUpdate  # numba compiles on import
 

@@ -9,9 +9,11 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
+from ..env.sensors import PAPER_SENSORS, Sensors
 from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE
 
 NUM_BINARY = OBSERVATION_SIZE - NUM_DISTANCES
+"""The paper's one-hot width (5); a world's own is ``len(sensors.picking_locations)``."""
 KERNELS = ("fast", "reference")
 
 
@@ -129,24 +131,25 @@ class DQNConfig:
 # --------------------------------------------------------------------------------------------
 # Network sizes
 # --------------------------------------------------------------------------------------------
-def layer_shapes(hidden_size: int, num_hidden_layers: int,
-                 num_actions: int) -> list[tuple[int, int]]:
-    """(out, in) of each linear layer: the hidden layers on the distances, then the head on
-    [last hidden layer, one-hot picking location]."""
-    shapes = [(hidden_size, NUM_DISTANCES)]
+def layer_shapes(hidden_size: int, num_hidden_layers: int, num_actions: int,
+                 sensors: Sensors = PAPER_SENSORS) -> list[tuple[int, int]]:
+    """(out, in) of each linear layer: the hidden layers on the world's distances, then the
+    head on [last hidden layer, one-hot picking location] (``sensors``: the world's layout)."""
+    shapes = [(hidden_size, sensors.num_distances)]
     shapes += [(hidden_size, hidden_size)] * (num_hidden_layers - 1)
-    shapes.append((num_actions, hidden_size + NUM_BINARY))
+    shapes.append((num_actions, hidden_size + len(sensors.picking_locations)))
     return shapes
 
 
-def forward_flops(hidden_size: int, num_hidden_layers: int, num_actions: int) -> int:
+def forward_flops(hidden_size: int, num_hidden_layers: int, num_actions: int,
+                  sensors: Sensors = PAPER_SENSORS) -> int:
     """Floating-point operations (2 per multiply-add) of one observation's forward pass."""
-    shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions)
+    shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions, sensors)
     return sum(2 * out * inp for out, inp in shapes)
 
 
-def update_flops(config: DQNConfig, num_actions: int = 11) -> int:
+def update_flops(config: DQNConfig, num_actions: int = 11, sensors: Sensors = PAPER_SENSORS) -> int:
     """Nominal FLOPs of one update: the online forward of the batch, its backward (~2x) and the
     target network's forward, i.e. 4 forward passes of the batch."""
     return 4 * config.batch_size * forward_flops(config.hidden_size, config.num_hidden_layers,
-                                                 num_actions)
+                                                 num_actions, sensors)

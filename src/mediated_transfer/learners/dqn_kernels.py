@@ -24,7 +24,6 @@ import numba
 import numpy as np
 import torch
 
-from ..env.task import NUM_DISTANCES
 
 if TYPE_CHECKING:
     from .dqn_config import DQNConfig
@@ -147,7 +146,8 @@ class FastUpdate:
         self._params_np = network.flat.detach().numpy()
         self._adam_np = (self.grad_flat.numpy(), self.adam_mean.numpy(), self.adam_sq_mean.numpy())
         layers, A = config.num_hidden_layers, network.shapes[-1][0]
-        self.distances, self.next_distances = torch.zeros(B, NUM_DISTANCES), torch.zeros(B, NUM_DISTANCES)
+        D = network.num_distances  # the world's distances (the paper's: 6)
+        self.distances, self.next_distances = torch.zeros(B, D), torch.zeros(B, D)
         # The head's input [last hidden layer, one-hot]: the last hidden layer is written
         # straight into its slot, so the concatenation costs nothing.
         self.head_input, self.target_head_input = torch.zeros(B, H + num_binary), torch.zeros(B, H + num_binary)
@@ -282,7 +282,8 @@ class FastGreedyPolicy:
     def __init__(self, network: QNetwork):
         self.flat = network.flat.detach().numpy()
         self.shapes = np.array(network.shapes, dtype=np.int64)
-        self.hidden = np.zeros((2, network.shapes[0][0]), np.float32)
+        # Scratch for the distances, then each hidden layer (a world may have more distances).
+        self.hidden = np.zeros((2, max(network.shapes[0])), np.float32)
         self.q = np.zeros(network.shapes[-1][0], np.float32)
 
     def q_values(self, observation: np.ndarray) -> np.ndarray:

@@ -22,12 +22,13 @@ except ModuleNotFoundError:  # no deep extra: the config and the shapes import, 
 
     torch = F = nn = _NoTorch()  # type: ignore[assignment]
 
-from ..env.task import NUM_DISTANCES
+from ..env.sensors import PAPER_SENSORS, Sensors
 from .dqn_config import layer_shapes
 
 
 class QNetwork(nn.Module):
     """Fig. 2: distances -> hidden ReLU layers; one-hot concatenated to the last; linear -> Q.
+    ``sensors``: the world's layout (env/sensors.py; the paper's: 6 distances, a 5-dim one-hot).
 
     All weights and biases are slices of one flat parameter vector (layer by layer: weight
     (out, in), then bias), which makes copying, checkpointing and the Adam step one vector
@@ -36,9 +37,11 @@ class QNetwork(nn.Module):
     """
 
     def __init__(self, hidden_size: int = 256, num_hidden_layers: int = 3, num_actions: int = 11,
-                 generator: torch.Generator | None = None):
+                 generator: torch.Generator | None = None, sensors: Sensors = PAPER_SENSORS):
         super().__init__()
-        self.shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions)
+        # The world's layout: its distances feed the hidden layers, its one-hot the head.
+        self.num_distances = sensors.num_distances
+        self.shapes = layer_shapes(hidden_size, num_hidden_layers, num_actions, sensors)
         self.flat = nn.Parameter(torch.empty(sum(o * i + o for o, i in self.shapes)))
         with torch.no_grad():
             for (out, inp), (w, b) in zip(self.shapes, self.layers()):
@@ -58,7 +61,7 @@ class QNetwork(nn.Module):
         return views
 
     def forward(self, observation: torch.Tensor) -> torch.Tensor:
-        distances, picking = observation[:, :NUM_DISTANCES], observation[:, NUM_DISTANCES:]
+        distances, picking = observation[:, :self.num_distances], observation[:, self.num_distances:]
         *hidden, (head_w, head_b) = self.layers()
         h = distances
         for w, b in hidden:

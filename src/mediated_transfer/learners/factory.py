@@ -12,12 +12,14 @@ that name the allowed values.
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any, Mapping
 
 from .. import plugins
 from ..mapping import config_from_mapping
-from ..env.task import NUM_DISTANCES, OBSERVATION_SIZE, PICKING_LOCATIONS
+from ..env.sensors import PAPER_SENSORS
+from ..env.task import PICKING_LOCATIONS
 from ..env.config import WorldConfig
 from .base import Learner
 from .dqn_config import DQNConfig, layer_shapes
@@ -79,45 +81,53 @@ def validate_learner_choice(
     return algo_config, rep_config
 
 
-def memory_bytes(algorithm: str, algo_config, rep_config) -> int:
-    """Estimated bytes of a learner's largest arrays (from the configs alone, nothing allocated)."""
+def memory_bytes(algorithm: str, algo_config, rep_config, world=None) -> int:
+    """Estimated bytes of a learner's largest arrays (from the configs alone, nothing allocated),
+    for the world's sensor layout and actions (``world``: a world of the door; None: the paper's)."""
+    sensors = getattr(world, "sensors", PAPER_SENSORS)
+    num_actions = getattr(world, "num_actions", NUM_ACTIONS)
     if algorithm in SB3_ALGORITHMS:
-        return sb3.memory_bytes(algorithm, algo_config, _num_features(rep_config))
+        return sb3.memory_bytes(algorithm, algo_config, _num_features(rep_config, sensors), sensors.size, num_actions)
     if algorithm == "dqn":
         c = algo_config
         # layer_shapes' first, one repeated and last layer: a list of 10^12 layers would not fit.
-        first, *rest = layer_shapes(c.hidden_size, 1, NUM_ACTIONS)
+        first, *rest = layer_shapes(c.hidden_size, 1, num_actions, sensors)
         params = first[0] * (first[1] + 1) + (c.num_hidden_layers - 1) * c.hidden_size * (c.hidden_size + 1)
         params += rest[-1][0] * (rest[-1][1] + 1)
         # float32: the replay buffer and its batch; weights, target weights, gradient and
         # Adam's two moments; the batch's activations (forward and backward).
         from .dqn import ReplayBuffer  # torch: only where a DQN is asked for
 
-        rows = (c.buffer_size + c.batch_size) * ReplayBuffer.WIDTH
+        rows = (c.buffer_size + c.batch_size) * ReplayBuffer.layout(sensors.size)["WIDTH"]
         activations = 2 * c.batch_size * c.hidden_size * c.num_hidden_layers
         return 4 * (rows + 5 * params + activations)
     if isinstance(rep_config, RBFConfig):
-        r = rep_config
-        features = (r.tool_target_bins + 1) ** 3 * (r.tool_origin_bins + 1) ** 3
+        features = _gaussians(rep_config, sensors)
         # float64 weights per action, and three (index, value) buffers of every feature (an
         # RBF state may activate all of them).
-        return features * (8 * NUM_ACTIONS + 3 * 16)
-    features = NUM_DISTANCES * rep_config.distance_bins
-    return features * 8 * NUM_ACTIONS
+        return features * (8 * num_actions + 3 * 16)
+    features = sensors.num_distances * rep_config.distance_bins
+    return features * 8 * num_actions
 
 
-def _num_features(rep_config) -> int:
+def _gaussians(rep_config: RBFConfig, sensors) -> int:
+    """The RBF grid's size: each distance gets its kind's bins + 1 centres (rbf.py)."""
+    bins = {"target": rep_config.tool_target_bins, "origin": rep_config.tool_origin_bins}
+    return math.prod(bins[kind] + 1 for kind in sensors.kinds)
+
+
+def _num_features(rep_config, sensors=PAPER_SENSORS) -> int:
     """Length of the feature vector of a representation's config (None: the sensor vector)."""
     if rep_config is None:
-        return OBSERVATION_SIZE
+        return sensors.size
     if isinstance(rep_config, RBFConfig):
-        return (rep_config.tool_target_bins + 1) ** 3 * (rep_config.tool_origin_bins + 1) ** 3 + len(PICKING_LOCATIONS)
-    return NUM_DISTANCES * rep_config.distance_bins + 2 * len(PICKING_LOCATIONS)
+        return _gaussians(rep_config, sensors) + len(sensors.picking_locations)
+    return sensors.num_distances * rep_config.distance_bins + 2 * len(sensors.picking_locations)
 
 
-def check_memory(algorithm: str, algo_config, rep_config) -> None:
+def check_memory(algorithm: str, algo_config, rep_config, world=None) -> None:
     """ValueError naming the size key if the learner cannot fit in this machine's memory."""
-    needed = memory_bytes(algorithm, algo_config, rep_config)
+    needed = memory_bytes(algorithm, algo_config, rep_config, world)
     total = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     if needed > total:
         keys = {"dqn": "algorithm.buffer_size, algorithm.batch_size, algorithm.hidden_size, "
@@ -187,9 +197,10 @@ def _builtin(group: str, name: str) -> str | None:
 
 def check_learner(algorithm: str, representation: str, algorithm_params: Mapping[str, Any],
                   representation_params: Mapping[str, Any], algorithm_target: str | None = None,
-                  representation_target_path: str | None = None) -> None:
+                  representation_target_path: str | None = None, world=None) -> None:
     """Every check of a learner before any work: its target importable, its interface, its
-    pairing with the representation, its keys (a built-in's values and memory too)."""
+    pairing with the representation, its keys (a built-in's values and memory too, for the
+    ``world``'s sensors and actions; None: the paper's)."""
     target = learner_target(algorithm, algorithm_target)
     plugins.check_interface("algorithm", target, LEARNER_METHODS, "learner")
     allowed = getattr(plugins.owner_class(target), "representations", None)
@@ -200,7 +211,7 @@ def check_learner(algorithm: str, representation: str, algorithm_params: Mapping
     if algorithm in ALGORITHMS and plugins.path_of(target) == plugins.path_of(learner_target(algorithm)):
         algo_config, rep_config = validate_learner_choice(algorithm, representation, algorithm_params,
                                                           representation_params)
-        check_memory(algorithm, algo_config, rep_config)
+        check_memory(algorithm, algo_config, rep_config, world)
         return
     plugins.check_parameters("algorithm", target, algorithm_params, PROVIDED)
     if features is not None:

@@ -217,22 +217,24 @@ def _check_common(config) -> None:
         _fail(config, "torch_threads", f"at most {MAX_TORCH_THREADS}")
 
 
-def memory_bytes(algorithm: str, config, num_inputs: int) -> int:
+def memory_bytes(algorithm: str, config, num_inputs: int, observation_size: int = OBSERVATION_SIZE,
+                 num_actions: int = NUM_ACTIONS) -> int:
     """Estimated bytes of the model's largest arrays, from the config alone (nothing allocated).
 
-    ``num_inputs``: the networks' input width (11, or the representation's features).
+    ``num_inputs``: the networks' input width (the sensor vector, or the representation's
+    features); ``observation_size``, ``num_actions``: the world's (the paper's: 11 and 11).
     """
-    widths = [num_inputs, *config.net_arch, NUM_ACTIONS]
+    widths = [num_inputs, *config.net_arch, num_actions]
     params = sum((a + 1) * b for a, b in zip(widths[:-1], widths[1:]))
     if algorithm == "sb3_ppo":
         # A policy and a value network of about that size; float32 weights, gradient and
         # Adam's two moments of each. The rollout: float64 sensor vectors and a few floats.
-        total = 2 * 4 * 4 * params + config.n_steps * config.n_envs * (8 * OBSERVATION_SIZE + 6 * 4)
+        total = 2 * 4 * 4 * params + config.n_steps * config.n_envs * (8 * observation_size + 6 * 4)
     else:
         # The Q-network and its target copy, the gradient and Adam's two moments; SB3's replay
         # buffer: float64 sensor vectors (observation and next), an int64 action, a float32
         # reward, done and timeout per transition.
-        total = 5 * 4 * params + config.buffer_size * (2 * 8 * OBSERVATION_SIZE + 8 + 3 * 4)
+        total = 5 * 4 * params + config.buffer_size * (2 * 8 * observation_size + 8 + 3 * 4)
     # The features of a minibatch (observations and next observations).
     return total + 2 * 4 * config.batch_size * num_inputs
 

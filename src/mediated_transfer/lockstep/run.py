@@ -96,7 +96,9 @@ def make_group(specs: Sequence["RunSpec"], streams: Sequence[RunStreams], device
 
     config, _ = validate_learner_choice(spec.algorithm, spec.representation, spec.algorithm_params,
                                         spec.representation_params)
-    return StackedDQN(config, [s.learner_seed for s in streams], device=device)
+    world = spec.make_world()  # its actions and sensor layout size the stacked networks
+    return StackedDQN(config, [s.learner_seed for s in streams], num_actions=world.num_actions, device=device,
+                      sensors=world.sensors)
 
 
 def execute_lockstep(specs: Sequence["RunSpec"], hooks: Sequence[RunHooks] | None = None,

@@ -22,11 +22,8 @@ import math
 import numpy as np
 import torch
 
-from ..env.task import NUM_DISTANCES
-from ..learners.dqn import DQNConfig, DQNLearner, ReplayBuffer
-
-_OBS = ReplayBuffer.OBSERVATION
-_NEXT = ReplayBuffer.NEXT_OBSERVATION
+from ..env.sensors import PAPER_SENSORS, Sensors
+from ..learners.dqn import DQNConfig, DQNLearner
 
 
 class StackedNetworks:
@@ -34,6 +31,7 @@ class StackedNetworks:
 
     def __init__(self, flat: torch.Tensor, shapes: list[tuple[int, int]]):
         self.flat, self.shapes = flat, shapes
+        self.num_distances = shapes[0][1]  # the first layer's input: the world's distances
         self.layers = []
         start = 0
         for out, inp in shapes:
@@ -43,15 +41,15 @@ class StackedNetworks:
             start += out
 
     def forward(self, observations: torch.Tensor, keep: list | None = None) -> torch.Tensor:
-        """Q of (K, B, 11) observations -> (K, B, actions). ``keep`` receives each layer's
-        input (for the backward pass)."""
-        h = observations[..., :NUM_DISTANCES]
+        """Q of (K, B, n) observations (the world's sensor vectors) -> (K, B, actions).
+        ``keep`` receives each layer's input (for the backward pass)."""
+        h = observations[..., :self.num_distances]
         *hidden, (head_w, head_b) = self.layers
         for w, b in hidden:
             if keep is not None:
                 keep.append(h)
             h = torch.baddbmm(b.unsqueeze(1), h, w.transpose(1, 2)).relu_()
-        head_input = torch.cat([h, observations[..., NUM_DISTANCES:]], dim=2)
+        head_input = torch.cat([h, observations[..., self.num_distances:]], dim=2)
         if keep is not None:
             keep.append(head_input)
         return torch.baddbmm(head_b.unsqueeze(1), head_input, head_w.transpose(1, 2))
@@ -61,11 +59,15 @@ class StackedDQN:
     """K runs' deep Q-learners trained together (the learner group of ``lockstep.device=cuda``)."""
 
     def __init__(self, config: DQNConfig, seeds: list[int], num_actions: int = 11,
-                 device: str | torch.device = "cpu"):
+                 device: str | torch.device = "cpu", sensors: Sensors = PAPER_SENSORS):
         self.config, self.device, self.num_actions = config, torch.device(device), num_actions
         # The views: each run's learner as a single run would build it (weights, stream).
-        self.views = [DQNLearner(config, num_actions=num_actions, seed=seed) for seed in seeds]
+        self.views = [DQNLearner(config, num_actions=num_actions, seed=seed, sensors=sensors) for seed in seeds]
         K, first = len(seeds), self.views[0]
+        # The replay row's slots for the world's sensor vector (a single run's buffer's).
+        layout = first.buffer
+        self._obs, self._next, self._action = layout.OBSERVATION, layout.NEXT_OBSERVATION, layout.ACTION
+        self._reward, self._bootstrap, width = layout.REWARD, layout.BOOTSTRAP, layout.WIDTH
         self.shapes = first.network.shapes
         stack = torch.stack([v.network.flat.detach() for v in self.views]).to(self.device)
         self.online = StackedNetworks(stack, self.shapes)
@@ -74,8 +76,8 @@ class StackedDQN:
         self.grads = StackedNetworks(self.grad, self.shapes).layers
         self.adam_mean, self.adam_sq_mean = torch.zeros_like(stack), torch.zeros_like(stack)
         self.adam_steps = 0
-        self.buffer = torch.zeros(K, config.buffer_size, ReplayBuffer.WIDTH, device=self.device)
-        self._staged = np.zeros((K, ReplayBuffer.WIDTH), np.float32)  # this step's transitions
+        self.buffer = torch.zeros(K, config.buffer_size, width, device=self.device)
+        self._staged = np.zeros((K, width), np.float32)  # this step's transitions
         self._index = np.zeros((K, config.batch_size), np.int64)
         self._runs = torch.arange(K, device=self.device)[:, None]
         self.size = self.position = self.steps = 0
@@ -107,7 +109,7 @@ class StackedDQN:
         return actions  # type: ignore[return-value]
 
     def _q(self, rows: torch.Tensor, observations: torch.Tensor) -> torch.Tensor:
-        """Q(s, .) of one observation per listed run: (len(rows), 11) -> (len(rows), actions)."""
+        """Q(s, .) of one observation per listed run: (len(rows), n) -> (len(rows), actions)."""
         # Every run greedy (most steps past the epsilon decay): the networks as they are, uncopied.
         nets = self.online if len(rows) == len(self.views) else StackedNetworks(self.online.flat[rows], self.shapes)
         return nets.forward(observations[:, None, :])[:, 0]
@@ -118,11 +120,11 @@ class StackedDQN:
         """Stage run k's transition; its batch indices are drawn now, from its stream, as
         ``DQNLearner.observe`` draws them (``learn`` does the work for all runs at once)."""
         row = self._staged[k]
-        row[_OBS] = observation
-        row[ReplayBuffer.ACTION] = action
-        row[ReplayBuffer.REWARD] = reward
-        row[_NEXT] = next_observation
-        row[ReplayBuffer.BOOTSTRAP] = 0.0 if terminated else 1.0
+        row[self._obs] = observation
+        row[self._action] = action
+        row[self._reward] = reward
+        row[self._next] = next_observation
+        row[self._bootstrap] = 0.0 if terminated else 1.0
         view, cfg = self.views[k], self.config
         # The view's counters advance as a single run's learner's would (epsilon reads them).
         view.steps += 1
@@ -163,11 +165,11 @@ class StackedDQN:
     def _update(self, rows: torch.Tensor) -> torch.Tensor:
         cfg = self.config
         B = rows.shape[1]
-        actions = rows[..., ReplayBuffer.ACTION].long()
-        best_next = self.target.forward(rows[..., _NEXT]).amax(dim=2)
-        y = rows[..., ReplayBuffer.REWARD] + cfg.gamma * rows[..., ReplayBuffer.BOOTSTRAP] * best_next
+        actions = rows[..., self._action].long()
+        best_next = self.target.forward(rows[..., self._next]).amax(dim=2)
+        y = rows[..., self._reward] + cfg.gamma * rows[..., self._bootstrap] * best_next
         inputs: list[torch.Tensor] = []
-        q = self.online.forward(rows[..., _OBS], keep=inputs)
+        q = self.online.forward(rows[..., self._obs], keep=inputs)
         td = q.gather(2, actions[..., None])[..., 0] - y
         d = cfg.huber_delta
         self.last_loss = torch.where(td.abs() <= d, 0.5 * td * td, d * (td.abs() - 0.5 * d)).mean(dim=1)

@@ -6,8 +6,8 @@ function, by dotted path), its ``name`` (table rows, folders, MLflow) and its ow
 The run loop calls ``_target_(context=StrategyContext, **parameters)`` once per run, then:
 
 - before every episode, while the strategy is not ``done``: ``next_task()``. A Task means "this
-  episode starts from this task" (a source task of C, or any task of the world's task space,
-  ``context.task_space``); None means "a target task", which the environment samples from its
+  episode starts from this task" (a source task of C, or any task of the run's world's task space,
+  ``context.task_space``, the world's ``task_space``: env/door.py); None means "a target task", which the environment samples from its
   own seeded stream. Once ``done`` is true, every further episode is a target task.
 - after every episode, source or target: ``report(EpisodeOutcome)``: the task (None for a
   target task), whether it was solved, its return and length, the learning step, and the
@@ -61,8 +61,9 @@ class EpisodeOutcome:
 
 @dataclass
 class StrategyContext:
-    """What a strategy is built from: its random stream, the world and its task space, and the
-    clustered source task set C (built when first asked for, and cached)."""
+    """What a strategy is built from: its random stream, the world's config and its task space
+    (the run's world's, env/door.py), and the clustered source task set C (built when first
+    asked for, and cached)."""
 
     rng: np.random.Generator
     """The strategy's own stream (from the run's seed; no other part of the run draws from it)."""
@@ -73,14 +74,23 @@ class StrategyContext:
     """Makes C (clustering is costly: only strategies that use C pay for it)."""
     given_sensors: np.ndarray | None = None
     """Sensor vectors to use instead of C's own (tests of eq. 3 on chosen vectors)."""
+    task_space: Any = None
+    """The run's world's task space (``world.task_space``, env/door.py): what curricula move
+    over; None: the paper's (``TaskSpace(world)``)."""
+
+    def __post_init__(self) -> None:
+        if self.task_space is None:
+            self.task_space = TaskSpace(self.world)
 
     @classmethod
-    def of_tasks(cls, tasks, rng: np.random.Generator, world: WorldConfig | None = None,
-                 sensors=None) -> "StrategyContext":
-        """A context with a given C (tests, the Gymnasium wrapper used from Python)."""
+    def of_tasks(cls, tasks, rng: np.random.Generator, world=None, sensors=None) -> "StrategyContext":
+        """A context with a given C (tests, the Gymnasium wrapper used from Python). ``world``:
+        a world (env/door.py; its config and task space), a WorldConfig (the paper's world of
+        it), or None (the paper's)."""
         tasks = list(tasks)
-        return cls(rng=rng, world=world or WorldConfig(), n_source=len(tasks),
-                   build_source_tasks=lambda: tasks, given_sensors=sensors)
+        config, space = (world.config, world.task_space) if hasattr(world, "task_space") else (world, None)
+        return cls(rng=rng, world=config or WorldConfig(), n_source=len(tasks),
+                   build_source_tasks=lambda: tasks, given_sensors=sensors, task_space=space)
 
     @functools.cached_property
     def source_tasks(self) -> list[Task]:
@@ -95,10 +105,6 @@ class StrategyContext:
         if self.given_sensors is not None:
             return np.asarray(self.given_sensors, dtype=float)
         return sensor_vectors(self.source_tasks, self.world)
-
-    @property
-    def task_space(self) -> TaskSpace:
-        return TaskSpace(self.world)
 
 
 @runtime_checkable
@@ -124,9 +130,11 @@ def start_episode(env, strategy: Strategy, seed: int | None = None) -> tuple[Any
 
 
 def make_strategy(name: str, tasks=(), sensors=None, rng: np.random.Generator | None = None,
-                  world: WorldConfig | None = None, **params) -> Strategy:
+                  world=None, **params) -> Strategy:
     """The strategy option ``name`` (conf/strategy/<name>.yaml, or a plugin's on the config
-    search path) over the source task set ``tasks``, from Python (the run loop builds its own)."""
+    search path) over the source task set ``tasks``, from Python (the run loop builds its own).
+    ``world``: a world (env/door.py), whose task space curricula move over; a WorldConfig or
+    None: the paper's world."""
     from .. import plugins
     from ..config.targets import builtin_target
 

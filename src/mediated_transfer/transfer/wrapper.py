@@ -6,8 +6,13 @@ at the episode's end whether it solved its source task. It drives the strategy e
 project's own loop does (``start_episode`` / ``report_episode`` in strategies.py, shared by
 both): with the same strategy, seed and actions, it starts the same tasks in the same order.
 
-``env`` is a ``MediatedInteractionEnv`` of scenario "target", bare or wrapped (e.g.
-``gymnasium.make(ENV_ID)``): its own reset samples the target tasks, from its seeded generator.
+``env`` is an environment of a world (env/door.py) of scenario "target", bare or wrapped:
+``world.make_env("target")``, or for the paper's world a ``MediatedInteractionEnv`` (e.g.
+``gymnasium.make(ENV_ID)``). What the wrapper relies on is the world's contract: a plain reset
+samples a target task from the environment's seeded generator, ``reset(options={"task": t})``
+starts a task of the world's task space (the strategy's tasks), and the observation is the
+world's sensor vector with one of its actions per step. ``world`` (default: the paper's) is
+checked against ``env``: its sensor vector's size and its number of actions.
 
 Info: every ``reset`` and ``step`` adds ``source_phase`` (this episode learns a source task) and
 ``solved_count`` (source tasks solved so far, |C_solved|).
@@ -36,7 +41,6 @@ from collections.abc import Mapping
 
 import gymnasium
 
-from ..env.mediated_env import MediatedInteractionEnv
 from .strategy import EpisodeOutcome, Strategy, solved_count, start_episode
 
 # Which wrapper has a source episode open on a strategy (weak both ways: neither is kept alive).
@@ -46,15 +50,20 @@ _OPEN_EPISODES: "weakref.WeakKeyDictionary[Strategy, weakref.ref]" = weakref.Wea
 class TransferWrapper(gymnasium.Wrapper):
     """Episodes chosen by a transfer strategy (``strategy=none``, ``regular`` or ``scaffolded``)."""
 
-    def __init__(self, env: gymnasium.Env, strategy: Strategy):
+    def __init__(self, env: gymnasium.Env, strategy: Strategy, world=None):
         super().__init__(env)
-        base = env.unwrapped
-        if not isinstance(base, MediatedInteractionEnv):
-            raise ValueError(f"TransferWrapper wraps a MediatedInteractionEnv (its reset starts a given "
-                             f"task), got {type(base).__name__}")
-        if base.scenario != "target":
+        if world is None:
+            from ..env.paper import PaperWorld
+
+            world = PaperWorld()
+        _check_env(env, world)
+        # A world's environment without a scenario attribute is the target scenario by contract
+        # (world.make_env("target")); one that names another cannot start target tasks.
+        scenario = getattr(env.unwrapped, "scenario", "target")
+        if scenario != "target":
             raise ValueError(f"TransferWrapper needs an environment of scenario 'target' (its reset "
-                             f"samples the target tasks), got scenario {base.scenario!r}")
+                             f"samples the target tasks), got scenario {scenario!r}")
+        self.world = world
         if not isinstance(strategy, Strategy):
             raise ValueError(f"strategy must be a transfer strategy (transfer/strategy.py: next_task, "
                              f"report, done), got {type(strategy).__name__}")
@@ -112,6 +121,20 @@ class TransferWrapper(gymnasium.Wrapper):
         info["source_phase"] = self.source_phase
         info["solved_count"] = solved_count(self.strategy)
         return info
+
+
+def _check_env(env: gymnasium.Env, world) -> None:
+    """ValueError (one line) unless ``env`` looks like an environment of ``world``: an
+    observation of its sensor vector's size and its number of discrete actions."""
+    observation, actions = env.observation_space, env.action_space
+    shape = getattr(observation, "shape", None)
+    n = getattr(actions, "n", None)
+    size, num_actions = world.sensors.size, world.num_actions
+    if shape != (size,) or n != num_actions:
+        raise ValueError(f"TransferWrapper wraps an environment of the world {type(world).__name__} "
+                         f"(observations of {size} sensors, {num_actions} actions; pass world= for "
+                         f"another world), got {type(env.unwrapped).__name__} with observation shape "
+                         f"{shape} and {n if n is not None else type(actions).__name__} actions")
 
 
 def _check_process(strategy: Strategy) -> None:
