@@ -285,3 +285,18 @@ def test_hydra_modes_given_together_are_refused_in_one_line(flags, tmp_path):
     message = str(stopped.value)
     assert message.startswith("Invalid configuration: ") and "cannot be combined" in message
     assert "\n" not in message and not list(tmp_path.iterdir())
+
+
+def test_an_experiment_registered_on_tuned_values_refuses_a_learner_without_them(tmp_path):
+    """Table V (PPO) is registered on Table I's tuned PPO values: without them it does not
+    start (require_tuned), in one line, before any folder; a learner with them starts."""
+    from mediated_transfer.sweep import _check_tuned
+
+    from mediated_transfer.config.compose import compose_config as compose
+
+    with pytest.raises(ConfigError, match=r"require_tuned=true \(table5_ppo\): none \(no tuned file "
+                                          r"sb3_ppo_network.yaml\)"):
+        _check_tuned(compose(["experiment=table5_ppo", "scale=smoke", f"paths.root={tmp_path}"], hydra=True))
+    _check_tuned(compose(["experiment=table5_ppo", "require_tuned=false", "scale=smoke"], hydra=True))
+    _check_tuned(compose(["experiment=table4_dnn", "require_tuned=true", "scale=smoke"], hydra=True))  # tuned DQN
+    assert not list(tmp_path.iterdir())

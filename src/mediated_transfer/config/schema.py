@@ -184,6 +184,7 @@ class RunConfig:
     threads_per_run: int = MISSING
     rerun_stale: bool = MISSING
     save_learner: bool = MISSING
+    require_tuned: bool = MISSING
     lockstep: LockstepConfig = MISSING
     # A node with its _target_ (conf/strategy/*.yaml): the built-ins' parameters and a plugin's
     # own, so its keys are checked against its target's signature (plugins.py), not here.

@@ -50,6 +50,7 @@ def preflight(overrides: Sequence[str], multirun: bool) -> "Prepared":
     parsed = OverridesParser.create().parse_overrides(list(overrides))
     fixed = [o.input_line for o in parsed if not o.is_sweep_override()]
     base = compose_config(fixed, hydra=True)
+    _check_tuned(base)
     if not multirun and base.hydra.mode != RunMode.MULTIRUN:
         if len(fixed) < len(overrides):
             swept = [o.input_line for o in parsed if o.is_sweep_override()]
@@ -170,6 +171,21 @@ def _prepare_tracking(config: DictConfig) -> None:
             tracking.prepare(tracking.TrackingSettings.from_config(config.tracking), experiment=str(config.name))
         except ValueError as error:
             raise ConfigError(str(error)) from None
+
+
+def _check_tuned(config: DictConfig) -> None:
+    """ConfigError (one line) if the command requires Table I's tuned values (``require_tuned``)
+    and its learner has none: an experiment registered on tuned values never runs without."""
+    if not OmegaConf.select(config, "require_tuned", default=False):
+        return
+    from ..config.compose import source_dirs
+    from ..config.tuned import tuned_line
+
+    runtime = config.hydra.runtime
+    line = tuned_line(runtime.choices, source_dirs(runtime.config_sources))
+    if line.startswith("tuned: none"):
+        raise ConfigError(f"require_tuned=true ({config.name}): {line.removeprefix('tuned: ')}; tune the learner "
+                          "first (Table I's protocol, docs/tuning.md), or require_tuned=false to run it on its provisional values")
 
 
 def _try_plugins(spec: "RunSpec") -> None:

@@ -66,7 +66,7 @@ RUNS_VIEW_STATE = {
 ``n_runs``) and time to threshold beside each name. It keeps MLflow's order (newest first), so
 the cells' summaries, logged last, come first with their runs folded under them: sorted by L_R,
 the UI would list the best runs before their cells and show them unfolded."""
-NOT_PARAMS = frozenset({"paths", "tracking", "threads_per_run", "rerun_stale", "save_learner", "report",
+NOT_PARAMS = frozenset({"paths", "tracking", "threads_per_run", "rerun_stale", "save_learner", "require_tuned", "report",
                         "lockstep.runs", "scale.seeds", "scale.reports_subdir"})
 """Config keys left out of a run's params: where outputs go and how runs are scheduled, which do
 not change what a run computes (as conf/config.yaml leaves them out of a variant's name)."""
