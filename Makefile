@@ -103,7 +103,7 @@ LEARNER ?= rbf
 WORKERS ?= 1
 TRIALS  ?=
 
-tune: $(STAMP) ## Random search of LEARNER=rbf|fsr|dqn (resumable; WORKERS=1, SCALE=paper|quick|smoke, TRIALS=)
+tune: $(STAMP) ## Random search of LEARNER=rbf|fsr|dqn|ppo (resumable; WORKERS=1, SCALE=paper|quick|smoke, TRIALS=)
 	$(BIN)/python -m mediated_transfer.tuning $(LEARNER) --workers $(WORKERS) --scale $(SCALE) $(if $(TRIALS),--trials $(TRIALS)) $(ARGS)
 
 SNAPSHOT := .cache/tune-snapshot/$(LEARNER)
