@@ -339,7 +339,7 @@ def test_tuned_values_apply_to_their_learner_only_and_are_searched_keys(path):
         assert OmegaConf.select(provisional, key) == getattr(option(), field)
     # A study's trials override every searched key, so tuned values must be searched keys.
     spaces = [load_search_space(p) for p in available_learners().values()]
-    [space] = [s for s in spaces if f"representation={representation}" in s.base]
+    [space] = [s for s in spaces if {f"algorithm={algorithm}", f"representation={representation}"} <= set(s.base)]
     assert set(values) <= {p.key for p in space.params}
     # Every value names where it comes from.
     text = path.read_text()
