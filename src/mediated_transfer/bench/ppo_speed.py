@@ -21,10 +21,9 @@ from __future__ import annotations
 
 import os
 import statistics
-import time
 from dataclasses import replace
 
-from .projection import JOB_OVERHEAD_S
+from .projection import JOB_OVERHEAD_S, timed_run
 
 KS = (1, 2, 4, 8, 16)
 """Numbers of environments compared (each divides the rollout)."""
@@ -59,21 +58,8 @@ def _spec(n_envs: int, rollouts: int, eval_episodes: int):
 def measure(n_envs: int, rollouts: int, eval_episodes: int = 1) -> dict:
     """One short run with ``n_envs`` environments: its learning steps/s over ``rollouts`` whole
     rollouts after the first, and the seconds of its one evaluation point."""
-    from ..run import execute_run
-    from ..transfer.source_tasks import precompute_source_task_sets
-
     paper, spec = _spec(n_envs, rollouts, eval_episodes)
-    if spec.n_source and spec.cache_dir is not None:  # the sweep clusters C once, before its runs
-        precompute_source_task_sets({spec.n_source}, spec.world, spec.source_pool_size,
-                                    spec.source_set_seed, cache_dir=spec.cache_dir)
-    marks: dict[int, float] = {}
-
-    def mark(step: int, _budget: int) -> None:
-        marks[step] = time.perf_counter()
-
-    start = time.perf_counter()
-    result = execute_run(spec, progress=mark, progress_every=ROLLOUT)
-    total = time.perf_counter() - start
+    result, marks, total = timed_run(spec, ROLLOUT)
     first, last = ROLLOUT, (rollouts + 1) * ROLLOUT
     learn = spec.budget / result.learning_steps_per_s
     return {"n_envs": n_envs, "steps_per_s": (last - first) / (marks[last] - marks[first]),

@@ -59,8 +59,6 @@ def probe(experiment: str, cell: str, steps: int | None) -> dict:
     """Time one short run of the table's row ``cell`` (in this process)."""
     from ..config.compose import compose_config
     from ..config.spec import run_spec
-    from ..run import execute_run
-    from ..transfer.source_tasks import precompute_source_task_sets
 
     cfg = compose_config([f"experiment={experiment}", f"cell={cell}", "scale=paper",
                           f"seed={PROBE_SEED}", "tracking=none"])
@@ -69,17 +67,7 @@ def probe(experiment: str, cell: str, steps: int | None) -> dict:
     measured = steps or PROBE_STEPS[paper.algorithm]
     budget = warm_up + measured
     spec = replace(paper, budget=budget, eval_points=1)
-    if spec.n_source and spec.cache_dir is not None:  # the sweep clusters C once, before its runs
-        precompute_source_task_sets({spec.n_source}, spec.world, spec.source_pool_size,
-                                    spec.source_set_seed, cache_dir=spec.cache_dir)
-    marks: dict[int, float] = {}
-
-    def mark(step: int, _budget: int) -> None:
-        marks[step] = time.perf_counter()
-
-    start = time.perf_counter()
-    result = execute_run(spec, progress=mark, progress_every=min(MARK_EVERY, budget))
-    total = time.perf_counter() - start
+    result, marks, total = timed_run(spec, min(MARK_EVERY, budget))
     learn = budget / result.learning_steps_per_s
     return {
         "experiment": experiment, "cell": cell, "algorithm": spec.algorithm,
@@ -89,6 +77,25 @@ def probe(experiment: str, cell: str, steps: int | None) -> dict:
         "setup_s": total - result.wall_time_s,
         "paper_budget": paper.budget, "paper_eval_points": paper.eval_points,
     }
+
+
+def timed_run(spec, every: int):
+    """``spec`` run once in this process, its source task set clustered first (as a sweep does,
+    before its runs): (result, the time of every ``every``-th learning step, seconds in all)."""
+    from ..run import execute_run
+    from ..transfer.source_tasks import precompute_source_task_sets
+
+    if spec.n_source and spec.cache_dir is not None:
+        precompute_source_task_sets({spec.n_source}, spec.world, spec.source_pool_size,
+                                    spec.source_set_seed, cache_dir=spec.cache_dir)
+    marks: dict[int, float] = {}
+
+    def mark(step: int, _budget: int) -> None:
+        marks[step] = time.perf_counter()
+
+    start = time.perf_counter()
+    result = execute_run(spec, progress=mark, progress_every=every)
+    return result, marks, time.perf_counter() - start
 
 
 def steady_rate(marks: dict[int, float], warm_up: int, budget: int) -> float | None:
