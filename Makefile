@@ -68,7 +68,7 @@ MLFLOW_DB   ?= mlflow.db
 # each command again waits for its queued jobs: the tables share their time in the queue.
 ON_SLURM := $(findstring hydra/launcher=slurm,$(ARGS))
 
-reproduce-tables: $(STAMP) ## Run the Tables II-IV sweeps at SCALE=paper|quick|smoke (resumable), then build reports/
+reproduce-tables: $(STAMP) ## Run the Tables II-IV sweeps at SCALE=paper|quick|smoke (resumable), then build reports/; EXPERIMENTS=table5_ppo: Table V and its answer
 ifneq ($(ON_SLURM),)
 	@for experiment in $(EXPERIMENTS); do \
 		$(BIN)/python -m mediated_transfer experiment=$$experiment scale=$(SCALE) $(ARGS) hydra.launcher.wait=false || exit 1; \
@@ -79,6 +79,7 @@ endif
 	done
 	$(BIN)/python -m mediated_transfer.reporting scale=$(SCALE) $(ARGS)
 	$(if $(filter paper,$(SCALE)),$(BIN)/python -m mediated_transfer.reporting.reproduction)
+	$(if $(filter table5_ppo,$(EXPERIMENTS)),$(BIN)/python -m mediated_transfer.reporting.transfer_answer --scale $(SCALE))
 
 slurm-check: $(STAMP) ## Opt-in, not CI: the SLURM preset on a throwaway single-node SLURM (Debian's packages; root)
 	PYTHON=$(BIN)/python bash scripts/slurm_check.sh

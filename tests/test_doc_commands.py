@@ -55,6 +55,8 @@ DRY = {
     ("docs/learners.md", "algorithm=sb3_ppo scale=quick     # a variant"): "a whole table of PPO runs",
     ("docs/results.md", "experiment=table2_rbf scale=paper"): "paper scale",
     ("docs/results.md", "make reproduction"): "paper scale",
+    ("docs/results.md", "transfer_answer --experiment table4_dnn"):
+        "reads the committed paper-scale runs: tests/test_transfer_answer.py runs it",
     ("docs/sensitivity.md", "make sensitivity"): "the study: 210 runs",
     ("docs/sweeps-and-slurm.md", "a subset"): "a whole table's sweep, in the block of its subset",
     ("docs/sweeps-and-slurm.md", "partition=<partition>"): "SLURM",

@@ -157,9 +157,10 @@ class TrackingConfig:
 
 @dataclass
 class ReportConfig:
-    """The ``report`` section of conf/experiment/*.yaml: which paper table a sweep reproduces."""
+    """The ``report`` section of conf/experiment/*.yaml: which paper table a sweep reproduces
+    (None: a table the paper does not have, e.g. Table V, reported without published values)."""
 
-    paper_table: str = MISSING
+    paper_table: Optional[str] = MISSING
     title: str = MISSING
     figure: str = MISSING
     figure_title: str = MISSING

@@ -83,7 +83,7 @@ def build_report(cfg: DictConfig) -> Report:
         runs_per_row=int(cfg.scale.seeds), threshold=metrics_cfg.threshold,
         max_reward=metrics_cfg.max_reward, variant=variant, stale_runs=len(stale_lines), left_out_runs=len(left_out))
     failed = {name: len(c.failed) for name, c in cells.items() if c.failed}
-    rows = table_rows(summaries, strategies, paper_rows(str(cfg.report.paper_table)), header.runs_per_row,
+    rows = table_rows(summaries, strategies, paper_rows(cfg.report.paper_table), header.runs_per_row,
                       failed)
     out_dir = reports_dir(cfg, variant)
     tables = write_tables(rows, header, out_dir, str(cfg.name))

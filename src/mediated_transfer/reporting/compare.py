@@ -66,7 +66,7 @@ def compare(experiment: str, shared: Sequence[str], variants: Sequence[str], bas
 
     first = configs[0]
     table = str(first.name)
-    cells = compared_cells(sweeps, paper_rows(str(first.report.paper_table)))
+    cells = compared_cells(sweeps, paper_rows(first.report.paper_table))
     out = Path(first.paths.reports_dir) / "compare"
     out.mkdir(parents=True, exist_ok=True)
     stem = comparison_stem(table, [s.label for s in sweeps], seeds)

@@ -55,6 +55,23 @@ def bootstrap(statistic: Callable[..., float], *groups: Sequence[float], resampl
     return percentile_interval(point, values)
 
 
+def bootstrap_rows(statistic: Callable[..., np.ndarray], *groups: Sequence[float], resamples: int = RESAMPLES,
+                   seed: int = SEED) -> tuple[float, float, float]:
+    """``bootstrap`` with a statistic of whole resample matrices (resamples x runs per group,
+    one result per row): the same draws in the same order, so the same interval, without a
+    Python call per resample (a table's 40 intervals took seconds each)."""
+    arrays = [np.asarray(g, dtype=float) for g in groups]
+    if any(a.size == 0 for a in arrays):
+        raise ValueError("every group needs at least one run")
+    point = float(statistic(*(a[None, :] for a in arrays))[0])
+    rng = np.random.default_rng(seed)
+    picks = [np.empty((resamples, a.size), dtype=np.int64) for a in arrays]
+    for i in range(resamples):  # bootstrap's order: per resample, each group in turn
+        for pick, a in zip(picks, arrays):
+            pick[i] = rng.integers(0, a.size, a.size)
+    return percentile_interval(point, np.asarray(statistic(*(a[p] for a, p in zip(arrays, picks))), dtype=float))
+
+
 def percentile_interval(point: float, values: np.ndarray) -> tuple[float, float, float]:
     """(point, low, high): the 95 % percentile interval of resampled ``values``, nan and +inf
     ranked as +inf (a ratio over a zero mean, a time never reached)."""
@@ -104,13 +121,18 @@ def mean_curve_time(curves, steps, config: MetricsConfig = MetricsConfig(), resa
 
 def ratio_of_means(numerator: Sequence[float], denominator: Sequence[float]) -> tuple[float, float, float]:
     """mean(numerator) / mean(denominator) with its 95 % bootstrap interval."""
-    return bootstrap(lambda a, b: _ratio(a.mean(), b.mean()), numerator, denominator)
+    return bootstrap_rows(lambda a, b: _ratios(a.mean(axis=1), b.mean(axis=1)), numerator, denominator)
 
 
 def ratio_of_medians(numerator: Sequence[float], denominator: Sequence[float]) -> tuple[float, float, float]:
     """median / median with its 95 % bootstrap interval; values may be +inf (a run that never
     reaches the threshold is slower than any that does)."""
-    return bootstrap(lambda a, b: _ratio(median(a), median(b)), numerator, denominator)
+    return bootstrap_rows(lambda a, b: _ratios(_medians(a), _medians(b)), numerator, denominator)
+
+
+def median_interval(values: Sequence[float]) -> tuple[float, float, float]:
+    """The median with its 95 % bootstrap interval, +inf values included (never: slower)."""
+    return bootstrap_rows(_medians, values)
 
 
 def format_interval(interval: tuple[float, float, float]) -> str:
@@ -124,6 +146,19 @@ def median(values: np.ndarray) -> float:
     """The median, +inf values included (a run that never reaches the threshold is slower)."""
     with np.errstate(invalid="ignore"):  # as in bootstrap's quantiles
         return float(np.median(values))
+
+
+def _medians(rows: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore"):  # as ``median``
+        return np.median(rows, axis=1)
+
+
+def _ratios(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``_ratio`` elementwise."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = a / b
+    out = np.where(np.isinf(a) & np.isinf(b), np.nan, out)
+    return np.where(b == 0, np.where(a > 0, np.inf, np.nan), out)
 
 
 def _ratio(a: float, b: float) -> float:

@@ -38,8 +38,11 @@ class PaperRow:
         return f"{self.strategy}_{self.n_source}"
 
 
-def paper_rows(table: str) -> list[PaperRow]:
-    """The rows of one of the paper's tables ("II", "III" or "IV"), in the paper's order."""
+def paper_rows(table: str | None) -> list[PaperRow]:
+    """The rows of one of the paper's tables ("II", "III" or "IV"), in the paper's order; none
+    for a table the paper does not have (``report.paper_table: null``)."""
+    if table is None:
+        return []
     rows = [r for r in _all_rows() if r.table == table]
     if not rows:
         known = sorted({r.table for r in _all_rows()})

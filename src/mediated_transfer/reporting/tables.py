@@ -112,19 +112,23 @@ def write_tables(rows: list[TableRow], header: TableHeader, out_dir: str | Path,
     out_dir.mkdir(parents=True, exist_ok=True)
     preamble = [header.heading(MARKDOWN), header.describe(MARKDOWN), header.threshold_note(MARKDOWN)]
     caption = " ".join([f"{header.heading(LATEX)}.", header.describe(LATEX), header.threshold_note(LATEX)])
+    md, tex = shown(rows, MARKDOWN), shown(rows, LATEX)
+    right = len(md.columns) - 1
     return [
-        write_markdown(shown(rows, MARKDOWN), out_dir / f"{name}.md", preamble, ["left"] + ["right"] * 7),
+        write_markdown(md, out_dir / f"{name}.md", preamble, ["left"] + ["right"] * right),
         write_csv(numbers(rows, header), out_dir / f"{name}.csv"),
-        write_latex(shown(rows, LATEX), out_dir / f"{name}.tex", "lrrrrrrr", caption),
+        write_latex(tex, out_dir / f"{name}.tex", "l" + "r" * right, caption),
     ]
 
 
 def shown(rows: list[TableRow], m: Markup) -> pd.DataFrame:
-    """The table as read: one text per cell, headed as in the paper."""
+    """The table as read: one text per cell, headed as in the paper; without the paper's
+    columns when the paper has no such table (Table V)."""
     heads = ["Scheme", m.n_source, "Runs", m.reward_loss,
              "Time to threshold", "Per-run median (reached)", f"{m.reward_loss} (paper)",
              "Time to threshold (paper)"]
-    return pd.DataFrame([_texts(r, m) for r in rows], columns=heads)
+    frame = pd.DataFrame([_texts(r, m) for r in rows], columns=heads)
+    return frame if any(r.paper for r in rows) else frame.drop(columns=heads[-2:])
 
 
 def _texts(row: TableRow, m: Markup) -> list[str]:

@@ -9,8 +9,7 @@ import math
 import numpy as np
 
 from ...metrics import learning_span, loss_after_learning
-from ..intervals import (bootstrap, format_interval, iqm, median, probability_of_improvement, ratio_of_means,
-                         sem)
+from ..intervals import format_interval, iqm, median_interval, probability_of_improvement, ratio_of_means, sem
 from .runs import MAX_REWARD, THRESHOLD, Learner, never_learns
 from .wording import steps_k
 
@@ -83,7 +82,7 @@ def dqn_failures(learners: dict[str, Learner]) -> list[str]:
 
 def _median_time_interval(times: np.ndarray) -> str:
     """The median per-run time to threshold with its bootstrap interval (never: slower than any)."""
-    point, low, high = bootstrap(median, times)
+    point, low, high = median_interval(times)
     return f"{steps_k(point)} [{steps_k(low)}, {steps_k(high)}]"
 
 

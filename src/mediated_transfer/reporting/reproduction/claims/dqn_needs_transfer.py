@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....metrics import MetricsConfig
-from ...intervals import bootstrap, format_interval, median
+from ...intervals import bootstrap, format_interval, median_interval
 from ...verdicts import ABOVE, BELOW, DETAIL, DIRECTION, Part, Row, reaches_threshold, size
 from ..claim import Claim
 from ..runs import Learner
@@ -50,7 +50,7 @@ def claim_5(learners: dict[str, Learner]) -> Claim:
                         size(final["none_0"], 5.0, BELOW, null=None)))
     high.rows.append(Row("DNN regular_100, mean final <R>", "~9", format_interval(final["regular_100"]),
                          size(final["regular_100"], 9.0, ABOVE, null=None)))
-    time = bootstrap(median, dnn.times_to_threshold("regular_100"))
+    time = median_interval(dnn.times_to_threshold("regular_100"))
     when.rows.append(Row("DNN regular_100, median per-run time to threshold", steps_k(dnn.paper_time("regular_100")),
                          f"{steps_k(time[0])} [{steps_k(time[1])}, {steps_k(time[2])}]",
                          size(time, dnn.paper_time("regular_100"), BELOW, null=None),

@@ -1,0 +1,289 @@
+"""``python -m mediated_transfer.reporting.transfer_answer``: the registered answer to the paper's
+open question, "does transfer help a learner other than Q-learning?", from a table sweep's stored
+runs (Table V, SB3's PPO: ``conf/experiment/table5_ppo.yaml``, which fixed the measures and the
+rule before its first run). This module applies that rule and nothing else:
+
+- per transfer row, the ratio of mean L_R (row / none_0) with a 95 % percentile bootstrap
+  interval over runs; **helps** when it lies entirely below 1, **hurts** when entirely above,
+  **undecided** when it includes 1 (said with the point estimate's side): R1 of
+  reporting/verdicts.py, the reproduction's own;
+- per strategy, its best N_source (the lowest mean L_R) carries the strategy's answer; every
+  row's outcome stands beside it, since that row was picked among five;
+- overall, "transfer helps <learner>" when the best row of regular or scaffolded transfer holds;
+  "transfer does not help <learner>" when no transfer row's interval lies below 1.
+
+Beside the rule, as registered: the ratio of median per-run times to threshold, the runs that
+never learn, and the discovery / learning split (the first rewarded target episode; from there to
+the first <R> >= 8), medians with intervals, a run that never gets there counted as slower.
+``--experiment table4_dnn`` applies the same rule to the DQN's table (not registered there:
+a cross-check of the machinery on a learner the paper did study).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from ..config.conf_dir import CONF_DIR
+from ..metrics import MetricsConfig
+from ..results import RunResult
+from ..studies import Study, Written, added_in, command
+from .collect import CellRuns, collect_sweep
+from .figures import _pyplot
+from .intervals import format_interval, median_interval, ratio_of_means, ratio_of_medians, sem
+from .paper import scheme
+from .reproduction.runs import never_learns
+from .reproduction.wording import steps_k
+from .verdicts import BELOW, HOLDS, OTHER_WAY, direction
+
+EXPERIMENT = "table5_ppo"
+REFERENCE = "none_0"
+STRATEGIES = ("regular", "scaffolded")
+LEARNERS = {"sb3_ppo": "PPO", "dqn": "the DQN", "linear_q": "linear Q(λ)"}
+"""How the answer names a learner (its algorithm's name otherwise)."""
+
+
+@dataclass(frozen=True)
+class Registered:
+    """What the experiment's file fixed: its rows (cells, in order) and runs per row."""
+
+    experiment: str
+    cells: list[str]
+    runs_per_row: int
+    file: Path
+
+    @classmethod
+    def read(cls, experiment: str, scale: str, conf_dir: Path = CONF_DIR) -> "Registered":
+        file = conf_dir / "experiment" / f"{experiment}.yaml"
+        if not file.is_file():
+            known = sorted(p.stem for p in (conf_dir / "experiment").glob("table*.yaml"))
+            raise ValueError(f"--experiment={experiment!r} is unknown; allowed: {', '.join(known)}")
+        scale_file = conf_dir / "scale" / f"{scale}.yaml"
+        if not scale_file.is_file():
+            known = sorted(p.stem for p in (conf_dir / "scale").glob("*.yaml"))
+            raise ValueError(f"--scale={scale!r} is unknown; allowed: {', '.join(known)}")
+        cells = str(OmegaConf.load(file).hydra.sweeper.params.cell).split(",")
+        return cls(experiment, [c.strip() for c in cells], int(OmegaConf.load(scale_file).seeds), file)
+
+
+@dataclass(frozen=True)
+class RowAnswer:
+    """One transfer row's measures against none_0 and its outcome under R1."""
+
+    cell: str
+    strategy: str
+    n_source: int
+    runs: int
+    loss_mean: float
+    loss_sem: float
+    loss_ratio: tuple[float, float, float]
+    time_ratio: tuple[float, float, float]
+    never_learn: int
+    outcome: str
+    """R1 on loss_ratio, the claim's side below 1."""
+
+    @property
+    def words(self) -> str:
+        return outcome_words(self.outcome, self.loss_ratio[0])
+
+
+@dataclass(frozen=True)
+class SplitRow:
+    """When a row's runs first solve a target task (discovery) and how long learning the pull
+    then takes (learning): medians with intervals, never counted as slower."""
+
+    cell: str
+    runs: int
+    discovered: int
+    learned: int
+    discovery: tuple[float, float, float]
+    learning: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Measures:
+    registered: Registered
+    learner: str
+    reference: CellRuns | None
+    rows: list[RowAnswer]
+    best: dict[str, RowAnswer]
+    splits: list[SplitRow]
+    finished: int
+    failed: list[RunResult]
+
+
+def outcome_words(outcome: str, point: float) -> str:
+    """The registered words for one row's R1 outcome."""
+    if outcome == HOLDS:
+        return "transfer helps"
+    if outcome == OTHER_WAY:
+        return "transfer hurts"
+    side = "below" if point < 1 else ("at" if point == 1 else "above")
+    return f"undecided (point estimate {side} 1)"
+
+
+def answer(best: dict[str, RowAnswer], rows: list[RowAnswer], learner: str) -> str:
+    """The registered overall answer, never kinder than the rule."""
+    helping = [s for s, row in best.items() if row.outcome == HOLDS]
+    if helping:
+        which = " and ".join(f"{scheme(s)} (best N_source = {best[s].n_source}, L_R ratio "
+                             f"{format_interval(best[s].loss_ratio)})" for s in helping)
+        return f"transfer helps {learner}: {which}"
+    holding = [r.cell for r in rows if r.outcome == HOLDS]
+    if not holding:
+        return (f"transfer does not help {learner}: no transfer row's L_R ratio interval lies "
+                "entirely below 1")
+    return (f"not decided by the registered rule: {', '.join(holding)} hold{'s' if len(holding) == 1 else ''}, "
+            "but no strategy's best row does")
+
+
+def infinite_if_none(values: list[int | None]) -> np.ndarray:
+    return np.array([math.inf if v is None else v for v in values], dtype=float)
+
+
+def measure(registered: Registered, cells: dict[str, CellRuns]) -> Measures:
+    reference = cells.get(REFERENCE)
+    rows, splits = [], []
+    threshold = MetricsConfig().threshold
+    for cell in registered.cells:
+        runs = cells[cell].results if cell in cells else []
+        if not runs:
+            continue
+        discovery = infinite_if_none([r.first_target_reward_step for r in runs])
+        learning = infinite_if_none([r.learning_span(threshold) for r in runs])
+        splits.append(SplitRow(cell, len(runs), int(np.isfinite(discovery).sum()), int(np.isfinite(learning).sum()),
+                               median_interval(discovery), median_interval(learning)))
+        if cell == REFERENCE or reference is None or not reference.results:
+            continue
+        losses = np.array([r.reward_loss for r in runs])
+        loss_ratio = ratio_of_means(losses, [r.reward_loss for r in reference.results])
+        time_ratio = ratio_of_medians(infinite_if_none([r.time_to_threshold for r in runs]),
+                                      infinite_if_none([r.time_to_threshold for r in reference.results]))
+        rows.append(RowAnswer(cell, cells[cell].strategy, cells[cell].n_source, len(runs), float(losses.mean()),
+                              sem(losses), loss_ratio, time_ratio, sum(map(never_learns, runs)),
+                              direction(loss_ratio, BELOW)))
+    best = {}
+    for strategy in STRATEGIES:
+        own = [r for r in rows if r.strategy == strategy]
+        if own:
+            best[strategy] = min(own, key=lambda r: r.loss_mean)
+    algorithm = next((r.algorithm for c in cells.values() for r in c.results), "")
+    return Measures(registered, LEARNERS.get(algorithm, algorithm), reference, rows, best, splits,
+                    sum(len(c.results) for c in cells.values()), [r for c in cells.values() for r in c.failed])
+
+
+def plot(measures: Measures, path: Path) -> Path:
+    """Each transfer row's L_R ratio with its interval, the line of no difference at 1."""
+    plt = _pyplot()
+    rows = measures.rows
+    fig, ax = plt.subplots(figsize=(6.4, 0.38 * len(rows) + 1.6))
+    colours = {HOLDS: "tab:green", OTHER_WAY: "tab:red"}
+    for i, row in enumerate(rows):
+        point, low, high = row.loss_ratio
+        ax.plot([low, min(high, 10.0)], [i, i], color=colours.get(row.outcome, "tab:gray"), lw=2)
+        ax.plot([point], [i], "o", color=colours.get(row.outcome, "tab:gray"))
+    ax.axvline(1.0, color="black", ls="--", lw=1)
+    ax.set_yticks(range(len(rows)), [r.cell for r in rows])
+    ax.invert_yaxis()
+    ax.set_xlabel("L_R with transfer / without (95 % bootstrap interval); < 1: transfer helps")
+    ax.set_title(f"Does transfer help {measures.learner}? ({measures.registered.experiment})", fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def render(measures: Measures, figure: str | None, scale: str) -> str:
+    reg = measures.registered
+    registered_here = reg.experiment == EXPERIMENT
+    heading = "The registered answer" if registered_here else "Table V's rule as a cross-check"
+    where = (f"the rule and measures were fixed in `conf/experiment/{reg.experiment}.yaml` (added in "
+             f"{added_in(reg.file)}) before its first run" if registered_here else
+             f"the rule and measures are those `conf/experiment/{EXPERIMENT}.yaml` registered for Table V, "
+             f"applied to `{reg.experiment}`, for which they were not registered")
+    lines = [f"# Does transfer help {measures.learner}? {heading} ({reg.experiment})", "",
+             "Generated by `python -m mediated_transfer.reporting.transfer_answer "
+             f"--experiment {reg.experiment} --scale {scale}` from the stored runs; {where}. "
+             "Do not edit by hand.", ""]
+    expected = len(reg.cells) * reg.runs_per_row
+    if measures.reference is None or not measures.reference.results:
+        return "\n".join(lines + [f"No runs without transfer ({REFERENCE}) yet: "
+                                  f"`python -m mediated_transfer experiment={reg.experiment} scale={scale}`.", ""])
+    if measures.finished < expected:
+        lines += [f"**Incomplete:** {measures.finished} of {expected} runs; the answer below is provisional.", ""]
+    if measures.failed:
+        lines += ["Stopped as failed, in no row: " + ", ".join(
+            f"{r.strategy}_{r.n_source} seed {r.seed} ({r.failure})" for r in measures.failed) + ".", ""]
+    lines += [f"**Answer ({'the registered rule' if registered_here else 'cross-check'}):** {answer(measures.best, measures.rows, measures.learner)}.", ""]
+    lines += ["Per strategy, its best N_source (lowest mean L_R) carries its answer; that row was picked "
+              "among five, which its interval does not correct for, so every row's outcome stands below.", ""]
+    for strategy, row in measures.best.items():
+        lines.append(f"- {scheme(strategy)}: best N_source = {row.n_source}, L_R ratio "
+                     f"{format_interval(row.loss_ratio)}: {row.words}.")
+    ref = np.array([r.reward_loss for r in measures.reference.results])
+    lines += ["", f"Without transfer: {len(ref)} runs, L_R {ref.mean():.1f} ± {sem(ref):.1f}, "
+              f"{sum(map(never_learns, measures.reference.results))} never learn.", "",
+              "| row | runs | L_R mean ± SEM | L_R ratio to none_0 [95 % CI] | median time-to-threshold ratio "
+              "[95 % CI] | never learn | outcome |", "|---|---:|---:|---|---|---:|---|"]
+    for row in measures.rows:
+        lines.append(f"| {row.cell} | {row.runs} | {row.loss_mean:.1f} ± {row.loss_sem:.1f} | "
+                     f"{format_interval(row.loss_ratio)} | {format_interval(row.time_ratio)} | "
+                     f"{row.never_learn} | {row.words} |")
+    if figure:
+        lines += ["", f"![L_R ratio per transfer row with its interval]({figure})"]
+    lines += ["", "## Discovery and learning", "",
+              "Discovery: the learning step of the first rewarded target-task episode. Learning: from there "
+              "to the first evaluation point with <R> >= 8. Medians over runs with 95 % bootstrap intervals; "
+              "a run that never gets there counts as slower than any that does ('never').", "",
+              "| row | runs | discover | discovery | learn | learning |", "|---|---:|---:|---|---:|---|"]
+    for split in measures.splits:
+        lines.append(f"| {split.cell} | {split.runs} | {split.discovered} | {_steps(split.discovery)} | "
+                     f"{split.learned} | {_steps(split.learning)} |")
+    return "\n".join(lines + [""])
+
+
+def _steps(interval: tuple[float, float, float]) -> str:
+    point, low, high = interval
+    return f"{steps_k(point)} [{steps_k(low)}, {steps_k(high)}]"
+
+
+def study(argv: list[str]) -> Study:
+    parser = argparse.ArgumentParser(prog="python -m mediated_transfer.reporting.transfer_answer",
+                                     description=__doc__.split("\n\n")[0])
+    parser.add_argument("--experiment", default=EXPERIMENT, help="the table experiment (default: %(default)s)")
+    parser.add_argument("--scale", default="paper", help="the sweep's scale (default: %(default)s)")
+    parser.add_argument("--root", default=".", help="the checkout whose multirun/ holds the runs")
+    parser.add_argument("--out", default=None,
+                        help="where to write (default: <root>/reports/<experiment>_answer.md, a scale "
+                             "other than paper under reports/<scale>/)")
+    args = parser.parse_args(argv)
+    registered = Registered.read(args.experiment, args.scale)
+    root = Path(args.root)
+    sweep = root / "multirun" / args.experiment / args.scale
+    if not sweep.is_dir():
+        raise FileNotFoundError(f"no runs of {args.experiment} at scale {args.scale} in {sweep}; run the sweep "
+                                f"first: python -m mediated_transfer experiment={args.experiment} scale={args.scale}")
+    reports = root / "reports" if args.scale == "paper" else root / "reports" / args.scale
+    out = Path(args.out) if args.out else reports / f"{args.experiment}_answer.md"
+
+    def report(measures: Measures) -> Written:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        figure = plot(measures, out.with_suffix(".png")) if measures.rows else None
+        return Written({out: render(measures, figure and figure.name, args.scale)}, [figure] if figure else [])
+
+    return Study(f"{args.experiment} answer", str(registered.file), lambda: collect_sweep(sweep),
+                 lambda cells: measure(registered, cells), report,
+                 lambda cells: [r for c in cells.values() for r in (*c.results, *c.failed)])
+
+
+main = command(study)
+
+if __name__ == "__main__":
+    sys.exit(main())
