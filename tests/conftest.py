@@ -22,3 +22,14 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
         callspec = getattr(item, "callspec", None)
         if callspec is not None and any(deep_option(v) for v in callspec.params.values()):
             item.add_marker(pytest.mark.skip(reason=REASON))
+
+
+@pytest.fixture(autouse=True)
+def _no_search_path_of_an_earlier_test():
+    """The config search path is the last composed config's (config/compose.py): a test that
+    composed a plugin's must not lend its options to the next test of the same worker."""
+    from mediated_transfer.config import compose
+
+    compose._SEARCH_DIRS.clear()
+    yield
+    compose._SEARCH_DIRS.clear()

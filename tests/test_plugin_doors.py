@@ -101,7 +101,8 @@ def test_a_plugin_learners_run_records_it_says_its_tuned_file_and_evaluates(pack
 def test_a_bad_key_of_a_plugin_learner_is_one_line_before_any_folder(package, tmp_path):
     ran = _cli(package, "algorithm=bare", SEARCHPATH, "scale=smoke", "tracking=none", f"paths.root={tmp_path}")
     assert ran.returncode != 0
-    assert ran.stderr.strip() == ("Invalid configuration: algorithm: unknown key(s) lambda; allowed: epsilon, "
+    assert ran.stderr.strip() == ("Invalid configuration: algorithm: unknown key(s) lambda (did you mean "
+                                  "'algorithm.lambda_' for lambda?); allowed: epsilon, "
                                   "lambda_, gamma, alpha0, boyan_n0, alpha_decay, trace_cutoff, max_rollback_share")
     assert not (tmp_path / "runs").exists()
 

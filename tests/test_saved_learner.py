@@ -83,6 +83,25 @@ def test_the_files_are_plain_arrays_and_tensors_read_without_unpickling(tmp_path
     assert state["buffer_size"] == 0 and state["buffer_transitions"].shape[0] == 0
 
 
+@needs_deep
+def test_the_format_follows_the_learner_s_state_not_its_algorithm_s_name(tmp_path):
+    """A plugin learner that extends the DQN (another algorithm name) is saved as the DQN is:
+    tensors in learner.pt, without its replay buffer; SB3's nested policy tensors too."""
+    import torch
+
+    from mediated_transfer.learners.factory import make_learner
+    from mediated_transfer.saved_learner import holds_tensors
+
+    spec = RunSpec(algorithm="dqn", representation="network", algorithm_params=DQN[2], **TINY)
+    learner = make_learner("dqn", "network", DQN[2], seed=0)
+    plugin = type("MyDQN", (type(learner),), {})  # a subclass, as a plugin would write it
+    learner.__class__ = plugin
+    path = save_learner(learner, spec.__class__(**{**spec.__dict__, "algorithm": "my_dqn"}), tmp_path)
+    assert path.name == DQN_FILE and torch.load(path, weights_only=True)["buffer_size"] == 0
+    assert holds_tensors({"policy": {"w": torch.zeros(2)}, "num_timesteps": 3})
+    assert not holds_tensors({"weights": np.zeros(3), "steps": 4})
+
+
 def test_a_file_that_would_need_unpickling_is_refused(tmp_path):
     folder = tmp_path / "run"
     folder.mkdir()

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from mediated_transfer.env import WorldConfig, sample_tasks
+from mediated_transfer.env.paper import PaperWorld
 from mediated_transfer.transfer import source_tasks
 from mediated_transfer.transfer.source_tasks import (
     cluster_representatives,
@@ -27,7 +28,8 @@ def forbid(monkeypatch, name):
     def fail(*args, **kwargs):
         raise AssertionError(f"{name} must not be called")
 
-    monkeypatch.setattr(source_tasks, name, fail)
+    # The pool is the world's draw (env/door.py): the paper's world's sample_tasks.
+    monkeypatch.setattr(PaperWorld if name == "sample_tasks" else source_tasks, name, fail)
 
 
 def test_returns_n_distinct_tasks_of_the_pool():

@@ -7,10 +7,12 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from mediated_transfer.config.compose import ConfigError, compose_config
@@ -120,3 +122,93 @@ def test_the_dqn_and_its_stacked_form_take_the_extra_sensor_world_s_layout(monke
                        num_actions=world.num_actions, sensors=world.sensors)
     for lock in execute_lockstep(specs, group=group):
         assert lock.failure is None and len(lock.mean_reward) == 3 and lock.learner_stats["updates"] > 0
+
+
+def test_source_tasks_are_clustered_on_the_world_s_own_sensors(monkeypatch, tmp_path):
+    """The extra-sensor world's C is clustered, and eq. (3) compares, on the vectors its agent
+    observes (7 distances); its cached sets are its own, not the paper's world's."""
+    from mediated_transfer.env.paper import PaperWorld
+    from mediated_transfer.transfer.source_tasks import source_task_set
+    from mediated_transfer.transfer.strategy import StrategyContext
+
+    monkeypatch.syspath_prepend(str(WORLDS))
+    from my_worlds.sensor import TargetDistanceWorld
+
+    world, paper = TargetDistanceWorld(PaperWorld().config), PaperWorld()
+    tasks = source_task_set(5, world, pool_size=200, seed=3, cache_dir=tmp_path)
+    assert len(list(tmp_path.iterdir())) == 1
+    assert source_task_set(5, world, pool_size=200, seed=3, cache_dir=tmp_path) == tasks  # read back
+    source_task_set(5, paper, pool_size=200, seed=3, cache_dir=tmp_path)
+    assert len(list(tmp_path.iterdir())) == 2  # the paper's world's set is another file
+    context = StrategyContext.of_tasks(tasks, np.random.default_rng(0), world=world)
+    assert context.sensors.shape == (5, 12)
+    assert context.sensors[:, 6].tolist() == pytest.approx([t.target_distance for t in tasks])
+
+
+@dataclass(frozen=True)
+class TwoToolTask:
+    """A task of a world with two tools: the target and each tool's corner (x, y) and angle."""
+
+    target_position: tuple[float, float]
+    tools: tuple[tuple[float, float, float], ...]
+
+    @property
+    def coordinates(self) -> np.ndarray:
+        return np.array([*self.target_position, *(v for tool in self.tools for v in tool)])
+
+    @property
+    def target_distance(self) -> float:
+        return float(np.hypot(*self.target_position))
+
+
+class TwoToolWorld:
+    """The source-task side of a world with two tools: its tasks, their sensors, their coordinates."""
+
+    def __init__(self):
+        from mediated_transfer.env.paper import PaperWorld
+
+        self.config = PaperWorld().config
+        self.task_space = None
+
+    def sample_tasks(self, scenario, n, rng):
+        return [TwoToolTask(tuple(rng.uniform(-5, 5, 2)), (tuple(rng.uniform(-5, 5, 3)), tuple(rng.uniform(-5, 5, 3))))
+                for _ in range(n)]
+
+    def task_sensors(self, tasks):
+        # Each tool's corner to the target and to O: 4 distances, then the one-hot of 8 locations.
+        rows = []
+        for t in tasks:
+            tx, ty = t.target_position
+            corners = [tool[:2] for tool in t.tools]
+            rows.append([*(np.hypot(x - tx, y - ty) for x, y in corners), *(np.hypot(x, y) for x, y in corners),
+                         *[0.0] * 7, 1.0])
+        return np.array(rows)
+
+    def task_from_coordinates(self, c):
+        if len(c) != 8:
+            raise ValueError(f"a two-tool task has 8 coordinates, got {len(c)}")
+        return TwoToolTask((float(c[0]), float(c[1])), (tuple(map(float, c[2:5])), tuple(map(float, c[5:8]))))
+
+
+def test_a_world_whose_tasks_hold_two_tools_gets_its_source_tasks_and_scaffolding(tmp_path):
+    """Nothing in the source task set or the strategies assumes the paper's task: a world whose
+    tasks hold two tools is clustered on its own sensors, cached and read back as its own tasks,
+    and Algorithm 2 orders them by eq. (3) on those sensors."""
+    from mediated_transfer.transfer.source_tasks import source_task_set
+    from mediated_transfer.transfer.strategy import EpisodeOutcome, StrategyContext, make_strategy
+
+    world = TwoToolWorld()
+    tasks = source_task_set(4, world, pool_size=100, seed=0, cache_dir=tmp_path)
+    assert all(isinstance(t, TwoToolTask) and len(t.tools) == 2 for t in tasks)
+    assert source_task_set(4, world, pool_size=100, seed=0, cache_dir=tmp_path) == tasks  # from the file
+    context = StrategyContext.of_tasks(tasks, np.random.default_rng(0), world=world)
+    assert context.sensors.shape == (4, 12)
+    strategy = make_strategy("scaffolded", tasks, rng=np.random.default_rng(0), world=world)
+    seen = []
+    for step in range(40):
+        task = strategy.next_task()
+        if task is None:
+            break
+        seen.append(task)
+        strategy.report(EpisodeOutcome(task=task, solved=True, episode_return=10.0, length=5, step=step * 5))
+    assert set(seen) == set(tasks)  # each source task of the world, until C is solved

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import difflib
+
 from dataclasses import fields
 from typing import Any, Mapping
 
@@ -12,7 +14,10 @@ def config_from_mapping(cls, values: Mapping[str, Any], group: str):
     allowed = [f.name for f in fields(cls)]
     unknown = sorted((str(k) for k in values if k not in allowed))
     if unknown:
+        nearest = {k: difflib.get_close_matches(k, allowed, n=1, cutoff=0.7) for k in unknown}
+        hints = [f"'{group}.{near[0]}' for {k}" for k, near in nearest.items() if near]
+        hint = f" (did you mean {', '.join(hints)}?)" if hints else ""
         raise ValueError(
-            f"{group}: unknown key(s) {', '.join(unknown)}; allowed: {', '.join(allowed)}"
+            f"{group}: unknown key(s) {', '.join(unknown)}{hint}; allowed: {', '.join(allowed)}"
         )
     return cls(**values)

@@ -96,14 +96,14 @@ class RunStreams:
 
     @classmethod
     def of(cls, spec: "RunSpec") -> "RunStreams":
-        world = spec.world
+        world = spec.make_world()
         context = StrategyContext(
-            rng=np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)), world=world,
-            n_source=spec.n_source, task_space=spec.make_world().task_space,
+            rng=np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)), world=spec.world,
+            n_source=spec.n_source, task_space=world.task_space, task_sensors=getattr(world, "task_sensors", None),
             build_source_tasks=lambda: source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
                                                        seed=spec.source_set_seed, cache_dir=spec.cache_dir))
         strategy = plugins.call(spec.strategy_class(), spec.strategy_params, context=context)
-        eval_tasks = spec.make_world().sample_tasks(
+        eval_tasks = world.sample_tasks(
             "target", spec.eval_episodes, np.random.default_rng(_stream_seed(spec.seed, _EVAL_TASK_STREAM)))
         return cls(_stream_seed(spec.seed, _LEARNER_STREAM), _stream_seed(spec.seed, _ENV_STREAM),
                    strategy, eval_tasks, _stream_seed(spec.seed, _EVAL_NOISE_STREAM))

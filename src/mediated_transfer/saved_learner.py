@@ -47,29 +47,29 @@ class SavedLearnerError(Exception):
     """A folder without a usable saved learner; the message is one line."""
 
 
-TORCH_ALGORITHMS = ("dqn", "sb3_ppo", "sb3_dqn")
-"""Learners whose state is torch tensors (learner.pt); the others' is numpy arrays (learner.npz)."""
-
-
-def learner_file(folder: str | os.PathLike, algorithm: str) -> Path:
-    return Path(folder) / (DQN_FILE if algorithm in TORCH_ALGORITHMS else LINEAR_FILE)
+def holds_tensors(state: dict) -> bool:
+    """Whether a learner's state holds torch tensors (learner.pt) rather than numpy arrays
+    (learner.npz): read from the state, so a plugin learner that extends the DQN is saved as
+    the DQN is, whatever its algorithm's name."""
+    return any(holds_tensors(v) if isinstance(v, dict) else type(v).__module__.split(".")[0] == "torch"
+               for v in state.values())
 
 
 def save_learner(learner: "Learner", spec: "RunSpec", folder: str | os.PathLike) -> Path:
     """Write ``learner`` (trained under ``spec``) to ``folder``; return the file's path."""
     meta = json.dumps({"format": FORMAT, "spec": asdict(spec)}, sort_keys=True)
     state = learner.state_dict()  # type: ignore[attr-defined]
-    path = learner_file(folder, spec.algorithm)
-    if spec.algorithm in TORCH_ALGORITHMS:
+    if holds_tensors(state):
         import torch
 
-        if spec.algorithm == "dqn":
+        path = Path(folder) / DQN_FILE
+        if "buffer_transitions" in state:  # the DQN's replay buffer (and a subclass's)
             # clone(): a slice would still carry (and save) the whole storage.
             state["buffer_transitions"] = state["buffer_transitions"][:0].clone()
             state["buffer_size"] = state["buffer_position"] = 0
         state["meta"] = meta
         return atomic_write(path, lambda handle: torch.save(state, handle))
-    return atomic_write(path, lambda handle: np.savez(handle, meta=np.array(meta), **state))
+    return atomic_write(Path(folder) / LINEAR_FILE, lambda handle: np.savez(handle, meta=np.array(meta), **state))
 
 
 def forget_learner(folder: str | os.PathLike) -> None:

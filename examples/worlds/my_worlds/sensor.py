@@ -21,6 +21,10 @@ class TargetDistanceWorld(PaperWorld):
     def make_env(self, scenario: str = "target", render_mode: str | None = None):
         return TargetDistance(super().make_env(scenario, render_mode), self.config.world_radius)
 
+    def task_sensors(self, tasks):
+        # C is clustered, and eq. (3) compares tasks, on what this agent observes: |TO| too.
+        return np.insert(super().task_sensors(tasks), 6, [t.target_distance for t in tasks], axis=1)
+
 
 class TargetDistance(gymnasium.ObservationWrapper):
     """Inserts |TO| after the distances, before the one-hot of the active picking location."""

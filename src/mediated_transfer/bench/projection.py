@@ -86,7 +86,7 @@ def timed_run(spec, every: int):
     from ..transfer.source_tasks import precompute_source_task_sets
 
     if spec.n_source and spec.cache_dir is not None:
-        precompute_source_task_sets({spec.n_source}, spec.world, spec.source_pool_size,
+        precompute_source_task_sets({spec.n_source}, spec.make_world(), spec.source_pool_size,
                                     spec.source_set_seed, cache_dir=spec.cache_dir)
     marks: dict[int, float] = {}
 

@@ -9,7 +9,7 @@ import numpy as np
 from .config import WorldConfig
 from .mediated_env import ACTION_NAMES, MediatedInteractionEnv
 from .sensors import PAPER_SENSORS, Sensors
-from .task import check_room, sample_tasks
+from .task import Task, check_room, sample_tasks, sensor_vectors
 from .task_space import TaskSpace
 
 
@@ -42,6 +42,15 @@ class PaperWorld:
     def sample_tasks(self, scenario: str, n: int, rng: np.random.Generator) -> list:
         """``n`` random tasks of ``scenario``, drawn from ``rng`` (evaluation, source pools)."""
         return sample_tasks(scenario, n, rng, self.config)
+
+    def task_sensors(self, tasks) -> np.ndarray:
+        """The sensor vector of each task at its start (eq. 2, O active), one row per task: what
+        the source task set C is clustered on and the scaffolded strategy's eq. (3) compares."""
+        return sensor_vectors(tasks, self.config)
+
+    def task_from_coordinates(self, coordinates) -> Task:
+        """A task from its flat ``coordinates`` (how source task sets are cached)."""
+        return Task.from_coordinates(coordinates)
 
     def check_room(self, scenario: str) -> None:
         """ValueError (one line) if the config's sizes leave no room for tasks of ``scenario``."""

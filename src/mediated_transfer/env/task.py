@@ -48,6 +48,14 @@ def sensor_vector(
     return obs
 
 
+def sensor_vectors(tasks, world: WorldConfig = WorldConfig()) -> np.ndarray:
+    """The tasks' sensor vectors s (eq. 2, active location O), one row per task."""
+    out = np.empty((len(tasks), OBSERVATION_SIZE))
+    for i, task in enumerate(tasks):
+        out[i] = task.sensor_vector(world)
+    return out
+
+
 # Plain floats below: every reset samples and validates a task, and numpy's per-call cost on
 # 2-vectors made that slower than a hundred environment steps.
 def _tool_points(tool_position, tool_angle: float, config: WorldConfig):

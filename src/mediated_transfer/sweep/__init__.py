@@ -216,7 +216,8 @@ def _warm_source_task_cache(specs: Sequence["RunSpec"]) -> None:
     groups: dict[tuple, set[int]] = {}
     for s in specs:
         if s.cache_dir is not None:
-            groups.setdefault((s.world, s.source_pool_size, s.source_set_seed, s.cache_dir), set()).add(s.n_source)
+            groups.setdefault((s.make_world(), s.source_pool_size, s.source_set_seed, s.cache_dir),
+                              set()).add(s.n_source)
     for (world, pool_size, seed, cache_dir), n_sources in groups.items():
         if n_sources - {0}:
             precompute_source_task_sets(n_sources, world, pool_size, seed, cache_dir=cache_dir)

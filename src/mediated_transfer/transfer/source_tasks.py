@@ -17,6 +17,12 @@ floating-point sums, and so the result, do not depend on the machine) is determi
 seed. N_source = 5000 on 10^4 tasks takes a few seconds; sets are still cached on disk (.npz of
 the task coordinates t, keyed by everything they depend on) so that a sweep computes each set
 once: call ``precompute_source_task_sets`` before the sweep starts.
+
+The world decides what a task is and what its sensor vector holds (env/door.py): the pool is
+the world's ``sample_tasks("source", ...)``, the clustering reads its ``task_sensors(tasks)``, and a
+cached set is read back through its ``task_from_coordinates``. The paper's world gives the
+vectors of eq. (2) and tasks of 5 coordinates; a world with another sensor, a second tool or a
+second target gives its own.
 """
 
 from __future__ import annotations
@@ -33,7 +39,8 @@ import numpy as np
 
 from ..atomic import atomic_write
 from ..env.config import WorldConfig
-from ..env.task import OBSERVATION_SIZE, Task, sample_tasks
+from ..env.door import PAPER_WORLD
+from ..env.task import Task, sensor_vectors
 
 log = logging.getLogger(__name__)
 
@@ -62,12 +69,21 @@ class ClusteringConfig:
             raise ValueError(f"clustering.tol must be >= 0, got {self.tol!r}")
 
 
-def sensor_vectors(tasks: Sequence[Task], world: WorldConfig = WorldConfig()) -> np.ndarray:
-    """The tasks' sensor vectors s (eq. 2, active location O), one row per task."""
-    out = np.empty((len(tasks), OBSERVATION_SIZE))
-    for i, task in enumerate(tasks):
-        out[i] = task.sensor_vector(world)
-    return out
+def door_world(world):
+    """The world (env/door.py) ``world`` describes: itself, or the paper's world of a config."""
+    if hasattr(world, "task_space"):
+        return world
+    from ..env.paper import PaperWorld
+
+    return PaperWorld(world)
+
+
+def task_sensors(world, tasks: Sequence) -> np.ndarray:
+    """The sensor vectors of ``tasks`` at their start, one row each, as ``world`` senses them
+    (its ``task_sensors``; a world without one: the paper's eq. 2)."""
+    world = door_world(world)
+    own = getattr(world, "task_sensors", None)
+    return np.asarray(own(list(tasks)) if own is not None else sensor_vectors(tasks, world.config), dtype=float)
 
 
 def cluster_representatives(
@@ -137,13 +153,14 @@ def source_task_set(
     _check(n_source, pool_size, seed)
     if n_source == 0:
         return []
+    world = door_world(world)
     path = _cache_path(cache_dir, n_source, world, pool_size, seed, clustering)
     if path is not None:
-        cached = _read(path, n_source)
+        cached = _read(path, n_source, world)
         if cached is not None:
             return cached
-    pool = sample_tasks("source", pool_size, np.random.default_rng(seed), world)
-    return _select_and_store(pool, sensor_vectors(pool, world), n_source, seed, clustering, path)
+    pool = world.sample_tasks("source", pool_size, np.random.default_rng(seed))
+    return _select_and_store(pool, task_sensors(world, pool), n_source, seed, clustering, path)
 
 
 def precompute_source_task_sets(
@@ -168,16 +185,17 @@ def precompute_source_task_sets(
         raise ValueError("precompute_source_task_sets needs a cache_dir to write to")
     files: dict[int, Path] = {}
     pool = sensors = None
+    world = door_world(world)
     for n in n_sources:
         if n == 0:
             continue
         path = _cache_path(cache_dir, n, world, pool_size, seed, clustering)
         files[n] = path
-        if _read(path, n) is not None:
+        if _read(path, n, world) is not None:
             continue
         if pool is None:
-            pool = sample_tasks("source", pool_size, np.random.default_rng(seed), world)
-            sensors = sensor_vectors(pool, world)
+            pool = world.sample_tasks("source", pool_size, np.random.default_rng(seed))
+            sensors = task_sensors(world, pool)
         _select_and_store(pool, sensors, n, seed, clustering, path)
     return files
 
@@ -218,24 +236,31 @@ def _select_and_store(pool, sensors, n_source, seed, clustering, path) -> list[T
 def _cache_path(cache_dir, n_source, world, pool_size, seed, clustering) -> Path | None:
     if cache_dir is None:
         return None
-    key = json.dumps(
-        {
-            "method": METHOD_VERSION,
-            "n_source": int(n_source),
-            "pool_size": int(pool_size),
-            "seed": int(seed),
-            "world": {k: v for k, v in world.to_dict().items()
-                      if k not in NOT_IN_CACHE_KEY and KEYS_ADDED_LATER.get(k, object()) != v},
-            "clustering": asdict(clustering),
-        },
-        sort_keys=True,
-    )
+    world = door_world(world)
+    config = world.config
+    values = config.to_dict() if hasattr(config, "to_dict") else asdict(config)
+    fields = {
+        "method": METHOD_VERSION,
+        "n_source": int(n_source),
+        "pool_size": int(pool_size),
+        "seed": int(seed),
+        "world": {k: v for k, v in values.items()
+                  if k not in NOT_IN_CACHE_KEY and KEYS_ADDED_LATER.get(k, object()) != v},
+        "clustering": asdict(clustering),
+    }
+    cls = type(world)
+    if f"{cls.__module__}.{cls.__qualname__}" != PAPER_WORLD:
+        # Another world may sample or sense the same config's tasks otherwise; the paper's
+        # keeps the key its files were cached under.
+        fields["world_class"] = f"{cls.__module__}.{cls.__qualname__}"
+    key = json.dumps(fields, sort_keys=True)
     digest = hashlib.sha256(key.encode()).hexdigest()[:16]
     return Path(cache_dir) / f"source_tasks_n{n_source}_{digest}.npz"
 
 
-def _read(path: Path, n_source: int) -> list[Task] | None:
-    """The cached set, or None when the file is missing or not a valid set of n_source tasks."""
+def _read(path: Path, n_source: int, world) -> list | None:
+    """The cached set, or None when the file is missing or not a valid set of n_source tasks
+    of ``world`` (its ``task_from_coordinates``)."""
     if not path.is_file():
         return None
     try:
@@ -244,12 +269,17 @@ def _read(path: Path, n_source: int) -> list[Task] | None:
     except (OSError, KeyError, ValueError) as error:
         log.warning("ignoring unreadable source task cache %s: %s", path, error)
         return None
-    if coordinates.shape != (n_source, 5) or not np.all(np.isfinite(coordinates)):
+    if coordinates.ndim != 2 or coordinates.shape[0] != n_source or not np.all(np.isfinite(coordinates)):
         log.warning(
-            "ignoring source task cache %s: coordinates of shape %s, expected (%d, 5)",
+            "ignoring source task cache %s: coordinates of shape %s, expected (%d, task coordinates)",
             path, coordinates.shape, n_source,
         )
         return None
-    return [Task.from_coordinates(t) for t in coordinates]
+    decode = getattr(world, "task_from_coordinates", Task.from_coordinates)
+    try:
+        return [decode(t) for t in coordinates]
+    except ValueError as error:  # e.g. a file of another world's tasks
+        log.warning("ignoring source task cache %s: %s", path, error)
+        return None
 
 

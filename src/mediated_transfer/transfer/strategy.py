@@ -77,6 +77,9 @@ class StrategyContext:
     task_space: Any = None
     """The run's world's task space (``world.task_space``, env/door.py): what curricula move
     over; None: the paper's (``TaskSpace(world)``)."""
+    task_sensors: Callable[[list], np.ndarray] | None = None
+    """The run's world's sensor vectors of tasks (``world.task_sensors``, env/door.py): what C
+    is clustered on and eq. (3) compares; None: the paper's eq. (2)."""
 
     def __post_init__(self) -> None:
         if self.task_space is None:
@@ -88,9 +91,11 @@ class StrategyContext:
         a world (env/door.py; its config and task space), a WorldConfig (the paper's world of
         it), or None (the paper's)."""
         tasks = list(tasks)
-        config, space = (world.config, world.task_space) if hasattr(world, "task_space") else (world, None)
+        door = hasattr(world, "task_space")
+        config, space = (world.config, world.task_space) if door else (world, None)
         return cls(rng=rng, world=config or WorldConfig(), n_source=len(tasks),
-                   build_source_tasks=lambda: tasks, given_sensors=sensors, task_space=space)
+                   build_source_tasks=lambda: tasks, given_sensors=sensors, task_space=space,
+                   task_sensors=getattr(world, "task_sensors", None) if door else None)
 
     @functools.cached_property
     def source_tasks(self) -> list[Task]:
@@ -99,11 +104,13 @@ class StrategyContext:
 
     @functools.cached_property
     def sensors(self) -> np.ndarray:
-        """The sensor vectors s of C, one row per task (eq. 2)."""
+        """The sensor vectors s of C, one row per task (eq. 2, or the world's own)."""
         from .source_tasks import sensor_vectors
 
         if self.given_sensors is not None:
             return np.asarray(self.given_sensors, dtype=float)
+        if self.task_sensors is not None:
+            return np.asarray(self.task_sensors(self.source_tasks), dtype=float)
         return sensor_vectors(self.source_tasks, self.world)
 
 
