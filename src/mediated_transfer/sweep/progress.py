@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 from ..atomic import atomic_write_text
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from ..results import RunResult
     from ..run import RunSpec
 
