@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
 import subprocess
 import sys
 from pathlib import Path
@@ -19,6 +18,7 @@ from mediated_transfer.config.compose import ConfigError, compose_config
 from mediated_transfer.config.spec import comparable, run_spec, spec_from_dict
 
 from .optional import needs_deep
+from .two_tool_world import TwoToolTask, TwoToolWorld
 
 REPO = Path(__file__).resolve().parents[1]
 WORLDS = REPO / "examples" / "worlds"
@@ -145,51 +145,6 @@ def test_source_tasks_are_clustered_on_the_world_s_own_sensors(monkeypatch, tmp_
     assert context.sensors[:, 6].tolist() == pytest.approx([t.target_distance for t in tasks])
 
 
-@dataclass(frozen=True)
-class TwoToolTask:
-    """A task of a world with two tools: the target and each tool's corner (x, y) and angle."""
-
-    target_position: tuple[float, float]
-    tools: tuple[tuple[float, float, float], ...]
-
-    @property
-    def coordinates(self) -> np.ndarray:
-        return np.array([*self.target_position, *(v for tool in self.tools for v in tool)])
-
-    @property
-    def target_distance(self) -> float:
-        return float(np.hypot(*self.target_position))
-
-
-class TwoToolWorld:
-    """The source-task side of a world with two tools: its tasks, their sensors, their coordinates."""
-
-    def __init__(self):
-        from mediated_transfer.env.paper import PaperWorld
-
-        self.config = PaperWorld().config
-        self.task_space = None
-
-    def sample_tasks(self, scenario, n, rng):
-        return [TwoToolTask(tuple(rng.uniform(-5, 5, 2)), (tuple(rng.uniform(-5, 5, 3)), tuple(rng.uniform(-5, 5, 3))))
-                for _ in range(n)]
-
-    def task_sensors(self, tasks):
-        # Each tool's corner to the target and to O: 4 distances, then the one-hot of 8 locations.
-        rows = []
-        for t in tasks:
-            tx, ty = t.target_position
-            corners = [tool[:2] for tool in t.tools]
-            rows.append([*(np.hypot(x - tx, y - ty) for x, y in corners), *(np.hypot(x, y) for x, y in corners),
-                         *[0.0] * 7, 1.0])
-        return np.array(rows)
-
-    def task_from_coordinates(self, c):
-        if len(c) != 8:
-            raise ValueError(f"a two-tool task has 8 coordinates, got {len(c)}")
-        return TwoToolTask((float(c[0]), float(c[1])), (tuple(map(float, c[2:5])), tuple(map(float, c[5:8]))))
-
-
 def test_a_world_whose_tasks_hold_two_tools_gets_its_source_tasks_and_scaffolding(tmp_path):
     """Nothing in the source task set or the strategies assumes the paper's task: a world whose
     tasks hold two tools is clustered on its own sensors, cached and read back as its own tasks,
@@ -202,7 +157,7 @@ def test_a_world_whose_tasks_hold_two_tools_gets_its_source_tasks_and_scaffoldin
     assert all(isinstance(t, TwoToolTask) and len(t.tools) == 2 for t in tasks)
     assert source_task_set(4, world, pool_size=100, seed=0, cache_dir=tmp_path) == tasks  # from the file
     context = StrategyContext.of_tasks(tasks, np.random.default_rng(0), world=world)
-    assert context.sensors.shape == (4, 12)
+    assert context.sensors.shape == (4, 8)
     strategy = make_strategy("scaffolded", tasks, rng=np.random.default_rng(0), world=world)
     seen = []
     for step in range(40):
@@ -212,3 +167,20 @@ def test_a_world_whose_tasks_hold_two_tools_gets_its_source_tasks_and_scaffoldin
         seen.append(task)
         strategy.report(EpisodeOutcome(task=task, solved=True, episode_return=10.0, length=5, step=step * 5))
     assert set(seen) == set(tasks)  # each source task of the world, until C is solved
+
+
+def test_the_run_loop_learns_on_a_world_whose_tasks_hold_two_tools(tmp_path):
+    """The one run loop, end to end, on a world that is not the paper's (tests/two_tool_world.py):
+    C clustered on its sensors and cached as its tasks, scaffolded source episodes, evaluation on
+    its target tasks, the exposure counted from its tasks' target distance."""
+    from mediated_transfer.run import RunSpec, execute_run
+
+    spec = RunSpec(algorithm="linear_q", representation="fsr", strategy="scaffolded", n_source=3, seed=0,
+                   budget=3000, eval_points=3, eval_episodes=5, source_pool_size=60, cache_dir=str(tmp_path),
+                   world_target="tests.two_tool_world.TwoToolWorld").validate()
+    assert isinstance(spec.make_world(), TwoToolWorld)
+    result = execute_run(spec)
+    assert result.failure is None and len(result.mean_reward) == 3
+    assert result.source_tasks_solved == 3 and result.source_phase_end is not None  # the pulls are easy
+    assert result.choices is not None and any(share > 0 for share in result.choices["target_share"])
+    assert execute_run(spec).mean_reward == result.mean_reward  # same seed, same curve
