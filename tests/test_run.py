@@ -146,9 +146,9 @@ def test_bad_input_fails_before_any_work(monkeypatch, changes, message):
 
 
 def test_spec_from_dict_names_unknown_keys():
-    with pytest.raises(ValueError, match=r"run: unknown key\(s\) budgett; allowed: algorithm,"):
+    with pytest.raises(ValueError, match=r"run: unknown key\(s\) budgett \(did you mean 'run.budget' for budgett\?\); allowed: algorithm,"):
         spec_from_dict({"budgett": 10})
-    with pytest.raises(ValueError, match=r"env: unknown key\(s\) goal_radiuss; allowed: interaction_radius,"):
+    with pytest.raises(ValueError, match=r"env: unknown key\(s\) goal_radiuss \(did you mean 'env.goal_radius' for goal_radiuss\?\); allowed: interaction_radius,"):
         spec_from_dict({"world": {"goal_radiuss": 2.0}})
     spec = spec_from_dict({"world": {"goal_radius": 3.0}, "seed": 4})
     assert spec.world.goal_radius == 3.0 and spec.seed == 4
