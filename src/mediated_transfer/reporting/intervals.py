@@ -59,7 +59,8 @@ def bootstrap_rows(statistic: Callable[..., np.ndarray], *groups: Sequence[float
                    seed: int = SEED) -> tuple[float, float, float]:
     """``bootstrap`` with a statistic of whole resample matrices (resamples x runs per group,
     one result per row): the same draws in the same order, so the same interval, without a
-    Python call per resample (a table's 40 intervals took seconds each)."""
+    Python call of the statistic per resample (20 runs a group, measured in one process: 0.30 of
+    bootstrap's time for a median, 0.76 for a ratio of means; the draws are the rest)."""
     arrays = [np.asarray(g, dtype=float) for g in groups]
     if any(a.size == 0 for a in arrays):
         raise ValueError("every group needs at least one run")
