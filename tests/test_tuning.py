@@ -433,3 +433,15 @@ def test_a_stopped_trial_counts_toward_the_trials_and_shows_as_a_lower_bound(spa
     text = (tmp_path / "reports" / "smoke" / "table1.md").read_text()
     assert "2 trials finished" in text and "1 of them were stopped early" in text
     assert "rank 1 of 1 run to the end" in text
+
+
+def test_table1_s_figure_places_a_choice_as_the_csv_spells_it():
+    """PPO's ent_coef choice 0.0 comes back from trials.csv as 0 (and n_steps as numpy ints):
+    the figure places each on its choice, not a KeyError."""
+    import numpy as np
+
+    from mediated_transfer.tuning.table1_figure import _choice_key
+
+    assert _choice_key(0) == _choice_key(0.0) == _choice_key(np.float64(0.0))
+    assert _choice_key(np.int64(2048)) == _choice_key(2048) != _choice_key(1024)
+    assert _choice_key("True") == _choice_key(True) != _choice_key(1.0)

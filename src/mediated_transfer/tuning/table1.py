@@ -50,8 +50,8 @@ def learner_section(space: SearchSpace, trials: pd.DataFrame | None, budget: int
     seeds = [c.split("seed_")[1] for c in seed_columns(trials, "reward_loss")]
     lines = [
         title, "",
-        f"Random search ({space.path.name}, sampler seed {space.sampler_seed}): {len(trials)} trials "
-        f"finished, each {len(seeds)} runs without transfer (tuning seeds {', '.join(seeds)}) at "
+        f"Random search ({space.path.name}, sampler seed {space.sampler_seed}): {len(trials)} "
+        f"trial{'' if len(trials) == 1 else 's'} finished, each {len(seeds)} runs without transfer (tuning seeds {', '.join(seeds)}) at "
         f"{budget:,} learning steps (scale {space.scale}). Objective: mean reward loss L_R over the "
         "tuning seeds (lower is better)."
         + ("" if not stopped else

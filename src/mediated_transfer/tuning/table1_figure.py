@@ -38,8 +38,8 @@ def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
         x = trials[p.key]
         if p.kind == "choice":
             labels = [override_value(c) for c in p.choices]
-            position = {override_value(c): i for i, c in enumerate(p.choices)}
-            x = x.map(lambda v: position[override_value(_native(v))])
+            position = {_choice_key(c): i for i, c in enumerate(p.choices)}
+            x = x.map(lambda v: position[_choice_key(v)])
             x = x + np.random.default_rng(0).uniform(-0.15, 0.15, len(x))  # jitter: see the spread
             ax.set_xticks(range(len(labels)), labels)
             ax.set_xlim(-0.5, len(labels) - 0.5)
@@ -83,13 +83,22 @@ def figure(space: SearchSpace, trials: pd.DataFrame, path: Path) -> Path:
                  f"{int(stuck.sum())} rewarded but never <R> >= 8", fontsize=8)
     for ax in list(axes.flat)[panels:]:
         ax.axis("off")
-    fig.suptitle(f"{space.learner}: {len(trials)} trials, tuning seeds "
+    fig.suptitle(f"{space.learner}: {len(trials)} trial{'' if len(trials) == 1 else 's'}, tuning seeds "
                  f"{', '.join(c.split('seed_')[1] for c in seed_columns(trials, 'reward_loss'))}")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110, metadata={"Software": None})
     plt.close(fig)
     return path
+
+
+def _choice_key(value):
+    """A choice as the figure places it: numbers by value (the CSV spells the choice 0.0 as 0),
+    anything else as an override spells it."""
+    value = _native(value)
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return override_value(value)
 
 
 def _native(value):
