@@ -26,6 +26,7 @@ A loop of one episode at a time leaves ``slot`` out (slot 0) and computes what i
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -37,7 +38,7 @@ from . import metrics, plugins
 from .learners.base import Learner
 from .results import RESULTS_FORMAT, RunResult
 from .transfer.choices import EpisodeChoices
-from .transfer.source_tasks import source_task_set
+from .transfer.source_tasks import source_task_set, task_sensors
 from .transfer.strategy import EpisodeOutcome, Strategy, StrategyContext, solved_count, start_episode, wants_td_error
 
 if TYPE_CHECKING:
@@ -99,7 +100,8 @@ class RunStreams:
         world = spec.make_world()
         context = StrategyContext(
             rng=np.random.default_rng(_stream_seed(spec.seed, _STRATEGY_STREAM)), world=spec.world,
-            n_source=spec.n_source, task_space=world.task_space, task_sensors=getattr(world, "task_sensors", None),
+            n_source=spec.n_source, task_space=world.task_space,
+            task_sensors=functools.partial(task_sensors, world),
             build_source_tasks=lambda: source_task_set(spec.n_source, world, pool_size=spec.source_pool_size,
                                                        seed=spec.source_set_seed, cache_dir=spec.cache_dir))
         strategy = plugins.call(spec.strategy_class(), spec.strategy_params, context=context)

@@ -62,6 +62,14 @@ def split_option(node: Mapping[str, Any]) -> tuple[str | None, dict[str, Any]]:
     return values.pop(plugins.TARGET, None), values
 
 
+def as_world(world):
+    """The world ``world`` describes: itself when it is one (it has a task space), the paper's
+    world of it when it is a config (a WorldConfig), the paper's default world for None."""
+    if hasattr(world, "task_space"):
+        return world
+    return build_world(None, world if world is not None else world_class(None).config_class())
+
+
 @functools.lru_cache(maxsize=64)
 def build_world(target: str | None, config):
     """The world of a run: ``world_class(target)(config)``; the same object for the same

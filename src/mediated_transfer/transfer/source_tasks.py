@@ -39,7 +39,7 @@ import numpy as np
 
 from ..atomic import atomic_write
 from ..env.config import WorldConfig
-from ..env.door import PAPER_WORLD
+from ..env.door import PAPER_WORLD, as_world
 from ..env.task import Task, sensor_vectors
 
 log = logging.getLogger(__name__)
@@ -69,19 +69,11 @@ class ClusteringConfig:
             raise ValueError(f"clustering.tol must be >= 0, got {self.tol!r}")
 
 
-def door_world(world):
-    """The world (env/door.py) ``world`` describes: itself, or the paper's world of a config."""
-    if hasattr(world, "task_space"):
-        return world
-    from ..env.paper import PaperWorld
-
-    return PaperWorld(world)
-
-
 def task_sensors(world, tasks: Sequence) -> np.ndarray:
-    """The sensor vectors of ``tasks`` at their start, one row each, as ``world`` senses them
-    (its ``task_sensors``; a world without one: the paper's eq. 2)."""
-    world = door_world(world)
+    """The sensor vectors of ``tasks`` at their start, one row each, as ``world`` (a world or
+    its config, env/door.py's ``as_world``) senses them (its ``task_sensors``; a world without
+    one: the paper's eq. 2)."""
+    world = as_world(world)
     own = getattr(world, "task_sensors", None)
     return np.asarray(own(list(tasks)) if own is not None else sensor_vectors(tasks, world.config), dtype=float)
 
@@ -153,7 +145,7 @@ def source_task_set(
     _check(n_source, pool_size, seed)
     if n_source == 0:
         return []
-    world = door_world(world)
+    world = as_world(world)
     path = _cache_path(cache_dir, n_source, world, pool_size, seed, clustering)
     if path is not None:
         cached = _read(path, n_source, world)
@@ -185,7 +177,7 @@ def precompute_source_task_sets(
         raise ValueError("precompute_source_task_sets needs a cache_dir to write to")
     files: dict[int, Path] = {}
     pool = sensors = None
-    world = door_world(world)
+    world = as_world(world)
     for n in n_sources:
         if n == 0:
             continue
@@ -236,7 +228,7 @@ def _select_and_store(pool, sensors, n_source, seed, clustering, path) -> list[T
 def _cache_path(cache_dir, n_source, world, pool_size, seed, clustering) -> Path | None:
     if cache_dir is None:
         return None
-    world = door_world(world)
+    world = as_world(world)
     config = world.config
     values = config.to_dict() if hasattr(config, "to_dict") else asdict(config)
     fields = {

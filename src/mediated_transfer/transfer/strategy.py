@@ -78,8 +78,8 @@ class StrategyContext:
     """The run's world's task space (``world.task_space``, env/door.py): what curricula move
     over; None: the paper's (``TaskSpace(world)``)."""
     task_sensors: Callable[[list], np.ndarray] | None = None
-    """The run's world's sensor vectors of tasks (``world.task_sensors``, env/door.py): what C
-    is clustered on and eq. (3) compares; None: the paper's eq. (2)."""
+    """The run's world's sensor vectors of tasks (source_tasks.task_sensors): what C is
+    clustered on and eq. (3) compares; None: the paper's eq. (2)."""
 
     def __post_init__(self) -> None:
         if self.task_space is None:
@@ -91,11 +91,13 @@ class StrategyContext:
         a world (env/door.py; its config and task space), a WorldConfig (the paper's world of
         it), or None (the paper's)."""
         tasks = list(tasks)
-        door = hasattr(world, "task_space")
-        config, space = (world.config, world.task_space) if door else (world, None)
-        return cls(rng=rng, world=config or WorldConfig(), n_source=len(tasks),
-                   build_source_tasks=lambda: tasks, given_sensors=sensors, task_space=space,
-                   task_sensors=getattr(world, "task_sensors", None) if door else None)
+        from ..env.door import as_world
+        from .source_tasks import task_sensors
+
+        world = as_world(world)
+        return cls(rng=rng, world=world.config, n_source=len(tasks), build_source_tasks=lambda: tasks,
+                   given_sensors=sensors, task_space=world.task_space,
+                   task_sensors=functools.partial(task_sensors, world))
 
     @functools.cached_property
     def source_tasks(self) -> list[Task]:
