@@ -82,6 +82,11 @@ def test_a_row_that_holds_outside_the_best_rows_decides_nothing():
                                            "strategy's best row does")
 
 
+def test_without_transfer_rows_there_is_no_answer_yet():
+    m = measure(REGISTERED, _cells({"none_0": [100_000] * 20}))
+    assert m.rows == [] and answer(m.best, m.rows, m.learner) == "none yet: no transfer row has finished runs"
+
+
 def test_each_outcome_has_the_registered_words():
     assert outcome_words(HOLDS, 0.5) == "transfer helps"
     assert outcome_words(OTHER_WAY, 1.5) == "transfer hurts"

@@ -130,6 +130,8 @@ def outcome_words(outcome: str, point: float) -> str:
 
 def answer(best: dict[str, RowAnswer], rows: list[RowAnswer], learner: str) -> str:
     """The registered overall answer, never kinder than the rule."""
+    if not rows:
+        return "none yet: no transfer row has finished runs"
     helping = [s for s, row in best.items() if row.outcome == HOLDS]
     if helping:
         which = " and ".join(f"{scheme(s)} (best N_source = {best[s].n_source}, L_R ratio "
