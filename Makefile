@@ -114,7 +114,7 @@ tune-snapshot: $(STAMP) ## Stage for git a consistent copy of LEARNER's (running
 	git update-index --add --cacheinfo 100644,$$(git hash-object -w $(SNAPSHOT)/study.db),tuning/$(LEARNER)/study.db
 	git update-index --add --cacheinfo 100644,$$(git hash-object -w $(SNAPSHOT)/trials.csv),tuning/$(LEARNER)/trials.csv
 
-refine: $(STAMP) ## Manual refinement of LEARNER=rbf|fsr|dqn: named candidates on more tuning seeds (resumable; WORKERS=1)
+refine: $(STAMP) ## Manual refinement of LEARNER=rbf|fsr|dqn|ppo: named candidates on more tuning seeds (resumable; WORKERS=1)
 	$(BIN)/python -m mediated_transfer.tuning.refine $(LEARNER) --workers $(WORKERS) $(ARGS)
 
 table1: $(STAMP) ## Build reports/table1.md and its figures from the committed tuning/*/trials.csv
