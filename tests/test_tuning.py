@@ -168,6 +168,20 @@ def test_every_search_space_loads_and_tunes_without_transfer_on_tuning_seeds():
             assert p.why
 
 
+def test_every_refinement_loads_on_seeds_its_search_did_not_choose_on():
+    from mediated_transfer.tuning import refine
+
+    for path in sorted((SEARCH_SPACE_DIR / "refine").glob("*.yaml")):
+        refinement = refine.load_refinement(path.stem)
+        names = [c.name for c in refinement.candidates]
+        assert "defaults" in names and len(names) >= 3, path.name
+        # The DQN's and PPO's refinements were declared after their searches: fresh seeds (the
+        # winner's curse); the linear learners' older ones share the search's seeds.
+        if path.stem in {"dqn", "ppo"}:
+            assert not set(refinement.seeds) & set(refinement.space.seeds), path.name
+        assert len(refinement.seeds) >= 10
+
+
 def test_a_study_refuses_to_continue_with_another_search_space(space, tmp_path):
     folder = study_folder(tmp_path, space)
     study_module.prepare(StudyPlan(space, folder, trials=1))
