@@ -228,10 +228,11 @@ def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_pa
 def test_the_readmes_headline_is_the_one_the_committed_runs_give():
     from mediated_transfer.config.compose import CONF_DIR
     from mediated_transfer.reporting.reproduction import load, with_headline
+    from mediated_transfer.reporting.reproduction.open_question import read
 
     root = CONF_DIR.parent
     readme = (root / "README.md").read_text()
-    assert with_headline(readme, headline(load(root))) == readme, (
+    assert with_headline(readme, headline(load(root), question=read(root))) == readme, (
         "README's headline is stale: run `make reproduction` after committing runs")
     with pytest.raises(ValueError, match="no headline markers"):
         with_headline("# no markers", "x")

@@ -118,3 +118,21 @@ def test_the_command_answers_for_the_committed_dqn_table_and_says_it_is_a_cross_
 def test_the_command_names_a_missing_sweep_in_one_line(tmp_path):
     with pytest.raises(SystemExit, match="no runs of table5_ppo at scale smoke .*run the sweep first"):
         main(["--scale", "smoke", "--root", str(tmp_path)])
+
+
+def test_reproduction_and_readme_give_table_v_s_answer_only_when_every_run_is_in():
+    from mediated_transfer.reporting.reproduction.open_question import OpenQuestion, headline, section
+
+    assert OpenQuestion(REGISTERED, None).status() == (
+        "not yet run (0 of 220 runs; `make reproduce-tables EXPERIMENTS=table5_ppo`)")
+    reached = {c: [100_000] * 20 for c in CELLS[1:]} | {"none_0": [300_000] * 10 + [None] * 10}
+    complete = OpenQuestion(REGISTERED, measure(REGISTERED, _cells(reached)))
+    assert complete.status().startswith("transfer helps PPO: regular transfer (best N_source = 1")
+    # Half the runs: the same rows decide, but the words say it is provisional.
+    half = OpenQuestion(REGISTERED, measure(REGISTERED, _cells({c: t[:10] for c, t in reached.items()})))
+    assert half.status().startswith("provisional, 110 of 220 runs: transfer helps PPO")
+    text = "\n".join(section(complete))
+    assert "**Answer:** transfer helps PPO" in text and "- regular_1 (best of regular): L_R ratio" in text
+    # The split: without transfer half the runs never discover (the median is 'never').
+    assert "none_0 discovers at never and learns the pull in never more (10 of 20 runs)" in headline(complete)
+    assert "regular_1 discovers at 60k and learns the pull in 40k more (20 of 20 runs)" in headline(complete)

@@ -12,6 +12,7 @@ from .claim import Claim
 from .claims import evaluate
 from .document import render
 from .headline import headline, with_headline
+from .open_question import read as read_open_question
 from .runs import Learner, load
 
 
@@ -37,9 +38,10 @@ def study(argv: list[str]) -> Study:
 
     def report(measured: tuple[dict[str, Learner], list[Claim]]) -> Written:
         learners, claims = measured
-        texts = {out: render(learners, claims)}
+        question = read_open_question(root)  # Table V's answer, or where it stands
+        texts = {out: render(learners, claims, question)}
         if args.out is None and readme.is_file():  # the headline of the README beside the report
-            texts[readme] = with_headline(readme.read_text(), headline(learners, claims))
+            texts[readme] = with_headline(readme.read_text(), headline(learners, claims, question))
         return Written(texts)
 
     return Study("reproduction", "reporting/reproduction/claims/ and reporting/verdicts.py", runs,

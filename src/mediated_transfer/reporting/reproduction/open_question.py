@@ -1,0 +1,82 @@
+"""The paper's open question in REPRODUCTION.md and the README's headline: Table V's registered
+answer (reporting/transfer_answer.py) from its paper-scale runs, or where Table V stands. The
+words are transfer_answer's, so the two reports cannot word the answer differently."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from .. import transfer_answer as registered_answer  # a module: it imports this package's runs.py
+from ..collect import collect_sweep
+from .wording import steps_k
+
+SCALE = "paper"
+
+
+@dataclass(frozen=True)
+class OpenQuestion:
+    registered: registered_answer.Registered
+    measures: registered_answer.Measures | None
+    """None while Table V has no paper-scale runs without transfer."""
+
+    @property
+    def expected(self) -> int:
+        return len(self.registered.cells) * self.registered.runs_per_row
+
+    @property
+    def finished(self) -> int:
+        return self.measures.finished if self.measures else 0
+
+    def status(self) -> str:
+        """The answer in the rule's words, labelled provisional until every registered run is in."""
+        if self.measures is None or self.measures.reference is None or not self.measures.reference.results:
+            return (f"not yet run ({self.finished} of {self.expected} runs; "
+                    f"`make reproduce-tables EXPERIMENTS={self.registered.experiment}`)")
+        said = registered_answer.answer(self.measures.best, self.measures.rows, self.measures.learner)
+        if self.finished < self.expected:
+            return f"provisional, {self.finished} of {self.expected} runs: {said}"
+        return said
+
+    def split(self) -> str:
+        """The discovery / learning split of none_0 and each strategy's best row, in one sentence."""
+        if self.measures is None:
+            return ""
+        wanted = [registered_answer.REFERENCE, *(row.cell for row in self.measures.best.values())]
+        parts = [f"{s.cell} discovers at {steps_k(s.discovery[0])} and learns the pull in {steps_k(s.learning[0])} "
+                 f"more ({s.learned} of {s.runs} runs)" for c in wanted for s in self.measures.splits if s.cell == c]
+        return ("Medians over runs: " + "; ".join(parts) + ".") if parts else ""
+
+
+def read(root: Path) -> OpenQuestion:
+    registered = registered_answer.Registered.read(registered_answer.EXPERIMENT, SCALE)
+    sweep = root / "multirun" / registered.experiment / SCALE
+    cells = collect_sweep(sweep) if sweep.is_dir() else {}
+    return OpenQuestion(registered, registered_answer.measure(registered, cells) if cells else None)
+
+
+def section(question: OpenQuestion) -> list[str]:
+    """REPRODUCTION.md's section on the open question."""
+    experiment = question.registered.experiment
+    lines = ["## Beyond the paper: does transfer help PPO? (Table V)", "",
+             "The paper leaves open whether its strategies help learners other than Q-learning. Table V asks it "
+             "of Stable-Baselines3's PPO, tuned by Table I's protocol, on the DQN's sensor vector: the 11 rows "
+             f"x {question.registered.runs_per_row} seeds at the paper's scale. Its measures and decision rule "
+             f"were registered in `conf/experiment/{experiment}.yaml` before its first run: \"transfer helps "
+             "PPO\" when the 95 % bootstrap interval of the L_R ratio (with transfer / without) of a strategy's "
+             "best N_source lies entirely below 1.", "",
+             f"**Answer:** {question.status()}."]
+    if question.measures is not None and question.measures.rows:
+        lines += ["", *[f"- {row.cell} (best of {row.strategy}): L_R ratio {row.loss_ratio[0]:.2f} "
+                  f"[{row.loss_ratio[1]:.2f}, {row.loss_ratio[2]:.2f}]: {row.words}."
+                  for row in question.measures.best.values()]]
+        lines += ["", question.split(), "",
+                  f"Every row, its interval and the split with intervals: [{experiment}_answer.md]({experiment}_answer.md)."]
+    return lines
+
+
+def headline(question: OpenQuestion) -> str:
+    """The README headline's line on the open question."""
+    line = f"**Beyond the paper: does transfer help PPO?** (Table V, registered before its runs): {question.status()}."
+    split = question.split()
+    return f"{line} {split}" if split else line
