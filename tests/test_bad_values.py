@@ -288,15 +288,18 @@ def test_hydra_modes_given_together_are_refused_in_one_line(flags, tmp_path):
 
 
 def test_an_experiment_registered_on_tuned_values_refuses_a_learner_without_them(tmp_path):
-    """Table V (PPO) is registered on Table I's tuned PPO values: without them it does not
-    start (require_tuned), in one line, before any folder; a learner with them starts."""
+    """Table V (PPO) is registered on Table I's tuned PPO values: a learner without them (here
+    SB3's DQN, never tuned) does not start (require_tuned), in one line, before any folder; PPO,
+    with its tuned file, starts."""
     from mediated_transfer.sweep import _check_tuned
 
     from mediated_transfer.config.compose import compose_config as compose
 
+    untuned = ["experiment=table5_ppo", "algorithm=sb3_dqn", "scale=smoke", f"paths.root={tmp_path}"]
     with pytest.raises(ConfigError, match=r"require_tuned=true \(table5_ppo\): none \(no tuned file "
-                                          r"sb3_ppo_network.yaml\)"):
-        _check_tuned(compose(["experiment=table5_ppo", "scale=smoke", f"paths.root={tmp_path}"], hydra=True))
-    _check_tuned(compose(["experiment=table5_ppo", "require_tuned=false", "scale=smoke"], hydra=True))
+                                          r"sb3_dqn_network.yaml\)"):
+        _check_tuned(compose(untuned, hydra=True))
+    _check_tuned(compose([*untuned, "require_tuned=false"], hydra=True))
+    _check_tuned(compose(["experiment=table5_ppo", "scale=smoke"], hydra=True))  # tuned PPO (Table I)
     _check_tuned(compose(["experiment=table4_dnn", "require_tuned=true", "scale=smoke"], hydra=True))  # tuned DQN
     assert not list(tmp_path.iterdir())
