@@ -83,3 +83,5 @@ def test_the_ppo_bench_times_k_environments_against_one_in_one_run():
     assert all(r["steps_per_s"] > 0 for r in result["by_k"].values())
     assert result["table_runs"] == 220 and set(result["table5"]) == {1}
     assert result["table5"][1]["wall_hours"] > 0
+    # Table V as it runs: its experiment's tuned values, 8 environments, rollouts of 512 x 8.
+    assert result["table5_as_run"]["rollout"] == 4096 and result["table5_as_run"]["wall_hours"] > 0

@@ -1,7 +1,7 @@
 """PPO's speed through the run loop: learning steps/s with K training environments
 (``algorithm.n_envs``, run_sb3.py) against one, and the projected wall time of Table V (PPO).
 
-Each run is a real one: SB3 PPO (provisional values, representation network) on the paper's
+Each run is a real one: SB3 PPO (provisional values, ``tuned=provisional``, representation network) on the paper's
 world with regular transfer (row ``regular_50``, its source phase included), through the run
 loop and its recorder, as a table's run goes. Every K keeps SB3's default rollout of 2,048
 learning steps (``n_steps`` = 2048 / K per environment), so that K changes how a rollout is
@@ -14,7 +14,9 @@ Table V is projected as projection.py projects Tables II-IV: its rows x seeds (t
 Table IV: 11 rows x 20 seeds at the paper's scale), each run ``setup + budget / (steps/s) +
 eval_points x (s per evaluation point) + job overhead``, divided by this machine's cores (one run
 per core). The evaluation point is timed once (100 target-task episodes of a barely trained
-policy, which mostly run to their step limit: an upper bound).
+policy, which mostly run to their step limit: an upper bound). Beside the comparison, each round
+also times Table V as it runs (``experiment=table5_ppo``: Table I's tuned values, their
+environments and rollout), and the table is projected from that rate too.
 """
 
 from __future__ import annotations
@@ -36,36 +38,51 @@ ROLLOUT = 2048
 """Learning steps per rollout, every K (SB3's default n_steps with one environment)."""
 CELL = "regular_50"
 TABLE = "table4_dnn"
+TABLE5 = "table5_ppo"
 """Table V has Table IV's rows and seeds (the DNN's sensor vector, PPO as its learner)."""
 PROBE_SEED = 10_000
 """Not a table seed (0-19) nor a tuning seed (1000-1009): the probe measures speed only."""
 ROUNDS = 3
 
 
-def _spec(n_envs: int, rollouts: int, eval_episodes: int):
+def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int):
+    """The paper-scale run of ``overrides`` and its probe: ``rollouts`` timed rollouts of
+    ``rollout`` learning steps (None: the composed n_steps x n_envs), then half of one."""
     from ..config.compose import compose_config
     from ..config.spec import run_spec
 
-    cfg = compose_config([f"experiment={TABLE}", "algorithm=sb3_ppo", f"cell={CELL}", "scale=paper",
-                          f"seed={PROBE_SEED}", "tracking=none",
-                          f"algorithm.n_envs={n_envs}", f"algorithm.n_steps={ROLLOUT // n_envs}"])
+    cfg = compose_config([f"cell={CELL}", "scale=paper", f"seed={PROBE_SEED}", "tracking=none", *overrides])
+    rollout = rollout or int(cfg.algorithm.n_steps) * int(cfg.algorithm.n_envs)
     paper = run_spec(cfg)
     # Marks at every rollout's end; the run stops half a rollout after the last timed one.
-    budget = (rollouts + 1) * ROLLOUT + ROLLOUT // 2
-    return paper, replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes)
+    budget = (rollouts + 1) * rollout + rollout // 2
+    return paper, replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes), rollout
+
+
+def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int) -> dict:
+    """One short run: its learning steps/s over ``rollouts`` whole rollouts after the first, and
+    the seconds of its one evaluation point."""
+    paper, spec, rollout = _spec(overrides, rollout, rollouts, eval_episodes)
+    result, marks, total = timed_run(spec, rollout)
+    first, last = rollout, (rollouts + 1) * rollout
+    learn = spec.budget / result.learning_steps_per_s
+    return {"steps_per_s": (last - first) / (marks[last] - marks[first]),
+            "eval_s_per_point": result.wall_time_s - learn, "setup_s": total - result.wall_time_s,
+            "paper_budget": paper.budget, "paper_eval_points": paper.eval_points,
+            "source_phase_end": result.source_phase_end, "rollout": rollout}
 
 
 def measure(n_envs: int, rollouts: int, eval_episodes: int = 1) -> dict:
-    """One short run with ``n_envs`` environments: its learning steps/s over ``rollouts`` whole
-    rollouts after the first, and the seconds of its one evaluation point."""
-    paper, spec = _spec(n_envs, rollouts, eval_episodes)
-    result, marks, total = timed_run(spec, ROLLOUT)
-    first, last = ROLLOUT, (rollouts + 1) * ROLLOUT
-    learn = spec.budget / result.learning_steps_per_s
-    return {"n_envs": n_envs, "steps_per_s": (last - first) / (marks[last] - marks[first]),
-            "eval_s_per_point": result.wall_time_s - learn, "setup_s": total - result.wall_time_s,
-            "paper_budget": paper.budget, "paper_eval_points": paper.eval_points,
-            "source_phase_end": result.source_phase_end}
+    """One short run with ``n_envs`` environments on the provisional values, the rollout held at
+    SB3's 2,048 learning steps."""
+    overrides = [f"experiment={TABLE}", "algorithm=sb3_ppo", "tuned=provisional",
+                 f"algorithm.n_envs={n_envs}", f"algorithm.n_steps={ROLLOUT // n_envs}"]
+    return {"n_envs": n_envs, **_timed(overrides, ROLLOUT, rollouts, eval_episodes)}
+
+
+def measure_table5(rollouts: int) -> dict:
+    """One short run as Table V runs: its experiment's learner, tuned values and environments."""
+    return _timed([f"experiment={TABLE5}"], None, rollouts, 1)
 
 
 def project_table(steps_per_s: float, eval_s_per_point: float, setup_s: float, runs: int, cores: int,
@@ -88,9 +105,11 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
         print(f"PPO ({CELL}, paper world, provisional values, rollout {ROLLOUT}): {rounds} rounds of "
               f"{rollouts} timed rollouts per K in {', '.join(map(str, ks))}...", flush=True)
     per_round: list[dict[int, dict]] = []
+    as_run: list[dict] = []
     evaluation = measure(1, 1, eval_episodes=100)  # one paper-sized evaluation point
     for _ in range(rounds):
         per_round.append({k: measure(k, rollouts) for k in ks})
+        as_run.append(measure_table5(rollouts))
     base = ks[0]
     result: dict = {"cores": cores, "rollout": ROLLOUT, "cell": CELL, "rounds": rounds, "by_k": {}}
     for k in ks:
@@ -106,8 +125,13 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
         projected[k] = project_table(rate, evaluation["eval_s_per_point"], setup,
                                      table_runs, cores, evaluation["paper_budget"],
                                      evaluation["paper_eval_points"])
+    tuned_rate = statistics.median(r["steps_per_s"] for r in as_run)
+    tuned_ratio = statistics.median(t["steps_per_s"] / r[base]["steps_per_s"] for t, r in zip(as_run, per_round))
+    as_tuned = {"steps_per_s": tuned_rate, "ratio_to_k1": tuned_ratio, "rollout": as_run[0]["rollout"],
+                **project_table(result["by_k"][base]["steps_per_s"] * tuned_ratio, evaluation["eval_s_per_point"],
+                                setup, table_runs, cores, evaluation["paper_budget"], evaluation["paper_eval_points"])}
     result.update({"eval_s_per_point": evaluation["eval_s_per_point"], "table_runs": table_runs,
-                   "recommended_k": RECOMMENDED_K, "table5": projected})
+                   "recommended_k": RECOMMENDED_K, "table5": projected, "table5_as_run": as_tuned})
     if verbose:
         for k in ks:
             r = result["by_k"][k]
@@ -117,6 +141,10 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
         for k, p in projected.items():
             print(f"  Table V ({table_runs} paper-scale runs) with n_envs={k}: a run ~{p['run_s']:.0f} s -> "
                   f"{p['cpu_hours']:.1f} CPU-h, {p['wall_hours']:.1f} h on {cores} cores", flush=True)
+        t = as_tuned
+        print(f"  Table V as it runs ({TABLE5}: tuned values, rollout {t['rollout']}): {t['steps_per_s']:,.0f} "
+              f"learning steps/s, x{t['ratio_to_k1']:.2f} vs provisional n_envs={base}; a run ~{t['run_s']:.0f} s -> "
+              f"{t['cpu_hours']:.1f} CPU-h, {t['wall_hours']:.1f} h on {cores} cores", flush=True)
     return result
 
 

@@ -4,6 +4,7 @@ words are transfer_answer's, so the two reports cannot word the answer different
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,24 +29,37 @@ class OpenQuestion:
     def finished(self) -> int:
         return self.measures.finished if self.measures else 0
 
+    @property
+    def complete(self) -> bool:
+        return self.measures is not None and self.finished >= self.expected
+
     def status(self) -> str:
-        """The answer in the rule's words, labelled provisional until every registered run is in."""
+        """The answer in the rule's words once every registered run is in; until then, where the
+        sweep stands: the rule's intervals are registered for the full rows, and a row of a few
+        runs has an interval too narrow to trust (of one run, none at all)."""
+        command = f"`make reproduce-tables EXPERIMENTS={self.registered.experiment}`"
         if self.measures is None or self.measures.reference is None or not self.measures.reference.results:
-            return (f"not yet run ({self.finished} of {self.expected} runs; "
-                    f"`make reproduce-tables EXPERIMENTS={self.registered.experiment}`)")
-        said = registered_answer.answer(self.measures.best, self.measures.rows, self.measures.learner)
-        if self.finished < self.expected:
-            return f"provisional, {self.finished} of {self.expected} runs: {said}"
-        return said
+            return f"not yet run ({self.finished} of {self.expected} runs; {command})"
+        if not self.complete:
+            return (f"running, {self.finished} of {self.expected} runs; the registered answer comes when all "
+                    f"are in ({command} resumes the sweep)")
+        return registered_answer.answer(self.measures.best, self.measures.rows, self.measures.learner)
 
     def split(self) -> str:
-        """The discovery / learning split of none_0 and each strategy's best row, in one sentence."""
-        if self.measures is None:
+        """The discovery / learning split of none_0 and each strategy's best row, in one sentence
+        (once the answer is given)."""
+        if not self.complete:
             return ""
         wanted = [registered_answer.REFERENCE, *(row.cell for row in self.measures.best.values())]
-        parts = [f"{s.cell} discovers at {steps_k(s.discovery[0])} and learns the pull in {steps_k(s.learning[0])} "
-                 f"more ({s.learned} of {s.runs} runs)" for c in wanted for s in self.measures.splits if s.cell == c]
+        parts = [f"{s.cell}: {_median_run(s.discovery[0], 'discovers the target reward at')}, then "
+                 f"{_median_run(s.learning[0], 'learns the pull in', ' more')} ({s.learned} of {s.runs} runs learn it)"
+                 for c in wanted for s in self.measures.splits if s.cell == c]
         return ("Medians over runs: " + "; ".join(parts) + ".") if parts else ""
+
+
+def _median_run(steps: float, verb: str, tail: str = "") -> str:
+    """'the median run <verb> 40k<tail>', or 'the median run never does' when more than half never do."""
+    return f"the median run {verb} {steps_k(steps)}{tail}" if math.isfinite(steps) else "the median run never does"
 
 
 def read(root: Path) -> OpenQuestion:
@@ -66,7 +80,7 @@ def section(question: OpenQuestion) -> list[str]:
              "PPO\" when the 95 % bootstrap interval of the L_R ratio (with transfer / without) of a strategy's "
              "best N_source lies entirely below 1.", "",
              f"**Answer:** {question.status()}."]
-    if question.measures is not None and question.measures.rows:
+    if question.complete and question.measures.rows:
         lines += ["", *[f"- {row.cell} (best of {row.strategy}): L_R ratio {row.loss_ratio[0]:.2f} "
                   f"[{row.loss_ratio[1]:.2f}, {row.loss_ratio[2]:.2f}]: {row.words}."
                   for row in question.measures.best.values()]]
