@@ -38,8 +38,9 @@ ROLLOUT = 2048
 """Learning steps per rollout, every K (SB3's default n_steps with one environment)."""
 CELL = "regular_50"
 TABLE = "table4_dnn"
-TABLE5 = "table5_ppo"
 """Table V has Table IV's rows and seeds (the DNN's sensor vector, PPO as its learner)."""
+TABLE5 = "table5_ppo"
+"""Table V itself: what "as it runs" composes (its tuned values, environments and rollout)."""
 PROBE_SEED = 10_000
 """Not a table seed (0-19) nor a tuning seed (1000-1009): the probe measures speed only."""
 ROUNDS = 3
