@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .. import transfer_answer as registered_answer  # a module: it imports this package's runs.py
 from ..collect import collect_sweep
+from ..intervals import format_interval
 from .wording import steps_k
 
 SCALE = "paper"
@@ -50,10 +51,11 @@ class OpenQuestion:
         (once the answer is given)."""
         if not self.complete:
             return ""
+        splits = {s.cell: s for s in self.measures.splits}
         wanted = [registered_answer.REFERENCE, *(row.cell for row in self.measures.best.values())]
         parts = [f"{s.cell}: {_median_run(s.discovery[0], 'discovers the target reward at')}, then "
                  f"{_median_run(s.learning[0], 'learns the pull in', ' more')} ({s.learned} of {s.runs} runs learn it)"
-                 for c in wanted for s in self.measures.splits if s.cell == c]
+                 for s in (splits[c] for c in wanted if c in splits)]
         return ("Medians over runs: " + "; ".join(parts) + ".") if parts else ""
 
 
@@ -81,9 +83,8 @@ def section(question: OpenQuestion) -> list[str]:
              "best N_source lies entirely below 1.", "",
              f"**Answer:** {question.status()}."]
     if question.complete and question.measures.rows:
-        lines += ["", *[f"- {row.cell} (best of {row.strategy}): L_R ratio {row.loss_ratio[0]:.2f} "
-                  f"[{row.loss_ratio[1]:.2f}, {row.loss_ratio[2]:.2f}]: {row.words}."
-                  for row in question.measures.best.values()]]
+        lines += ["", *[f"- {row.cell} (best of {row.strategy}): L_R ratio {format_interval(row.loss_ratio)}: "
+                        f"{row.words}." for row in question.measures.best.values()]]
         lines += ["", question.split(), "",
                   f"Every row, its interval and the split with intervals: [{experiment}_answer.md]({experiment}_answer.md)."]
     return lines
