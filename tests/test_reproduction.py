@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from mediated_transfer.reporting.intervals import (bootstrap, format_interval, iqm, mean_curve_time,
+from mediated_transfer.reporting.intervals import (bootstrap, bootstrap_rows, format_interval, iqm, mean_curve_time,
                                                    probability_of_improvement, ratio_of_means, ratio_of_medians,
                                                    resample_indices, seeds_to_decide, sem)
 from mediated_transfer.metrics import reward_loss, time_to_threshold, times_to_threshold_of_curves
@@ -52,6 +52,18 @@ def test_bootstrap_intervals_hold_their_point_and_rebuild_identically():
     assert wide[2] - wide[1] > high - low
     with pytest.raises(ValueError, match="at least one run"):
         bootstrap(np.mean, [])
+
+
+@pytest.mark.parametrize("sizes", [(20, 20), (19, 20), (7,), (1, 1), (3, 5, 3)])
+def test_the_resample_matrix_draws_what_bootstraps_loop_draws(sizes):
+    # bootstrap_rows draws groups of one size in one call; the intervals must stay the loop's.
+    rng = np.random.default_rng(11)
+    groups = [rng.normal(50, 20, n) for n in sizes]
+    ratio = lambda *g: g[0].mean(axis=-1) / sum(x.mean(axis=-1) for x in g)  # noqa: E731
+    assert bootstrap_rows(ratio, *groups, resamples=2000, seed=4) == bootstrap(
+        lambda *g: float(ratio(*g)), *groups, resamples=2000, seed=4)
+    assert resample_indices(sizes[0], 300, 4).tolist() == [
+        list(r.integers(0, sizes[0], sizes[0])) for r in [np.random.default_rng(4)] for _ in range(300)]
 
 
 def test_ratio_of_medians_takes_never_reached_as_slower_than_any():
