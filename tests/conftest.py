@@ -16,6 +16,9 @@ if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    # The slow tests first (order otherwise kept): spread over the workers from the start, they
+    # do not leave one worker running a long sweep while the others are done.
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
     if DEEP:
         return
     for item in items:

@@ -100,6 +100,7 @@ def test_without_table_i_runs_the_report_says_how_to_start_and_draws_nothing(tmp
     assert not (tmp_path / "ablation.png").exists()
 
 
+@pytest.mark.slow
 @needs_deep
 def test_the_registered_sweep_runs_every_arm_in_its_own_folder_and_reports_it(tmp_path):
     """The experiment as registered, at smoke scale on one seed: four arms, each in its own folder,

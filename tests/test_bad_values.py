@@ -143,6 +143,7 @@ def assert_finite_result(spec: RunSpec) -> None:
 
 
 # derandomize: the same examples on every run, so a CI result is reproducible.
+@pytest.mark.slow
 @settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from([k for k in KEYS if DEEP or not deep_option(k[0])]), VALUES)
 def test_every_numeric_value_is_refused_in_one_line_or_runs(learner_key, value):

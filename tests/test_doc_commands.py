@@ -126,6 +126,7 @@ def check_pip(args: list[str]) -> int:
     return 0 if args[:1] == ["install"] else 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("page, index, code", BLOCKS, ids=[f"{p}:block{i}" for p, i, _ in BLOCKS])
 def test_documented_block_runs(page, index, code, shims, tmp_path):
     work = tmp_path / "work"

@@ -401,6 +401,7 @@ def test_checkpoints_move_between_kernels(saved, loaded):
         learner.update(learner.buffer.sample(learner.rng)), rel=1e-5)
 
 
+@pytest.mark.slow
 def test_reference_kernels_learn_the_chain():
     learner = DQNLearner(small_config(kernels="reference"), seed=0)
     run_chain(learner, 2_000)

@@ -34,6 +34,7 @@ def _sweep_and_report(root: Path, experiment: str, *overrides: str) -> str:
     return report.stdout
 
 
+@pytest.mark.slow
 def test_a_users_strategy_runs_in_a_table_sweep_and_gets_its_own_row(tmp_path):
     _sweep_and_report(tmp_path, "table2_rbf", "cell=custom", "strategy=easy_first", "n_source=3")
     result = json.loads((tmp_path / "multirun/table2_rbf/smoke/easy_first_3/seed=0/result.json").read_text())
@@ -43,6 +44,7 @@ def test_a_users_strategy_runs_in_a_table_sweep_and_gets_its_own_row(tmp_path):
     assert "| easy_first | 3 |" in table and "regular transfer" in table
 
 
+@pytest.mark.slow
 def test_a_users_learner_runs_in_a_table_sweep(tmp_path):
     _sweep_and_report(tmp_path, "table3_fsr", "cell=none_0", "algorithm=tabular_q", "representation.distance_bins=5")
     result = json.loads((tmp_path / "multirun/table3_fsr/smoke/none_0/seed=0/algorithm=tabular_q,"
@@ -51,6 +53,7 @@ def test_a_users_learner_runs_in_a_table_sweep(tmp_path):
     assert len(result["mean_reward"]) == 2
 
 
+@pytest.mark.slow
 def test_a_world_variant_with_a_straight_stick_runs_in_a_table_sweep(tmp_path):
     _sweep_and_report(tmp_path, "table2_rbf", "cell=regular_1", "env=straight_stick")
     result = json.loads((tmp_path / "multirun/table2_rbf/smoke/regular_1/seed=0/env=straight_stick/result.json")

@@ -57,6 +57,7 @@ def _wait_for(path: Path, process: subprocess.Popen, timeout: float = 120) -> No
         time.sleep(0.05)
 
 
+@pytest.mark.slow
 def test_two_sweeps_of_different_configurations_in_one_folder_at_once_are_named(tmp_path, capsys):
     shared = tmp_path / "shared"  # one paths.sweep_dir for two experiments: the same run folders
     common = ["cell=none_0", "seed=0", "scale=smoke", "tracking=none", "hydra/launcher=basic",
@@ -100,6 +101,7 @@ def _args(root: Path, cache: Path) -> list[str]:
     return ["experiment=table3_fsr", "scale=smoke", "tracking=none", f"paths.root={root}", f"paths.cache_dir={cache}"]
 
 
+@pytest.mark.slow
 def test_a_run_folder_holding_another_cells_run_is_set_aside_recomputed_and_left_out(tmp_path, source_cache,
                                                                                      capsys):
     root = tmp_path

@@ -243,6 +243,7 @@ def _sweep(root, *args: str):
 
 @pytest.mark.slow
 def test_a_lockstep_sweep_writes_the_runs_of_a_sweep_without_it_and_resumes(tmp_path):
+    from mediated_transfer.config.spec import spec_from_dict, spec_values
     from mediated_transfer.results import RunResult
 
     def results(root):
@@ -250,20 +251,21 @@ def test_a_lockstep_sweep_writes_the_runs_of_a_sweep_without_it_and_resumes(tmp_
         return {f"{c}/seed={s}": RunResult.read(sweep / c / f"seed={s}")
                 for c in ("none_0", "regular_1") for s in range(3)}
 
-    _sweep(tmp_path / "single")
-    log = _sweep(tmp_path / "lockstep", "lockstep.runs=2")
+    log = _sweep(tmp_path, "lockstep.runs=2")
     assert "none_0: 2 runs in lockstep (seeds 0,1) on cpu" in log
-    single, grouped = results(tmp_path / "single"), results(tmp_path / "lockstep")
+    grouped = results(tmp_path)
+    # Each run is the one its stored config gives alone (as a sweep without lockstep runs it).
+    single = {k: execute_run(spec_from_dict(spec_values(r.config))) for k, r in grouped.items()}
     assert {k: outcome(r) for k, r in grouped.items()} == {k: outcome(r) for k, r in single.items()}
     # Each run keeps its own folder and record; those computed in a group say so.
     assert grouped["none_0/seed=0"].code["lockstep_runs"] == 2 and grouped["none_0/seed=0"].code["lockstep"]
     assert "lockstep" not in grouped["none_0/seed=2"].code  # the cell's last seed ran alone
     assert all(stale(r) is None for r in grouped.values())
-    folder = tmp_path / "lockstep" / "multirun" / "table4_dnn" / "smoke" / "regular_1" / "seed=1"
+    folder = tmp_path / "multirun" / "table4_dnn" / "smoke" / "regular_1" / "seed=1"
     assert (folder / ".hydra" / "config.yaml").is_file() and (folder / "learner.pt").is_file()
     # Resumed: the missing runs of a cell are grouped, the finished one is only found.
     for seed in (0, 1):
-        (tmp_path / "lockstep" / "multirun" / "table4_dnn" / "smoke" / "none_0" / f"seed={seed}" / "result.json").unlink()
-    log = _sweep(tmp_path / "lockstep", "lockstep.runs=3")
+        (tmp_path / "multirun" / "table4_dnn" / "smoke" / "none_0" / f"seed={seed}" / "result.json").unlink()
+    log = _sweep(tmp_path, "lockstep.runs=3")
     assert "none_0: 2 runs in lockstep (seeds 0,1) on cpu" in log and "regular_1: 2 runs in lockstep" not in log
-    assert {k: outcome(r) for k, r in results(tmp_path / "lockstep").items()} == {k: outcome(r) for k, r in single.items()}
+    assert {k: outcome(r) for k, r in results(tmp_path).items()} == {k: outcome(r) for k, r in single.items()}

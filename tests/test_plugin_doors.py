@@ -78,6 +78,7 @@ def test_the_tuned_line_names_the_file_or_none():
     assert tuned_line({"tuned": None, "algorithm": "dqn", "representation": "network"}, []).startswith("tuned: none (~tuned)")
 
 
+@pytest.mark.slow
 def test_a_plugin_learners_run_records_it_says_its_tuned_file_and_evaluates(package, tmp_path):
     ran = _cli(package, "algorithm=sarsa", SEARCHPATH, "scale=smoke", "tracking=none", f"paths.root={tmp_path}")
     assert ran.returncode == 0, ran.stderr[-2000:]

@@ -119,6 +119,7 @@ def current():
     return digests_now(KINDS)
 
 
+@pytest.mark.slow
 def test_adding_an_unused_strategy_or_moving_a_file_leaves_every_run_current(tmp_path, current):
     strategies = "src/mediated_transfer/transfer/strategies.py"
     added = "\n\nclass EasyFirst(RegularTransfer):\n    def _choose(self):\n        return self._unsolved[0]\n"
@@ -143,6 +144,7 @@ def test_a_change_to_algorithm_2_makes_the_scaffolded_runs_stale_and_no_other(tm
     assert changed == {"linear_q/rbf/scaffolded"}
 
 
+@pytest.mark.slow
 @needs_deep
 def test_a_change_to_one_learner_makes_only_its_runs_stale(tmp_path, current):
     edits = {"src/mediated_transfer/learners/dqn_kernels.py": ("self.adam_steps += 1", "self.adam_steps += 2")}

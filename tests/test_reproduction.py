@@ -197,6 +197,7 @@ def test_claim_2_counts_the_same_runs_once_and_only_the_linear_learners():
     assert claim.verdict == REPRODUCED
 
 
+@pytest.mark.slow
 def test_a_claims_verdict_is_derived_from_its_parts_and_each_has_a_direction():
     from mediated_transfer.config.compose import CONF_DIR
     from mediated_transfer.reporting.reproduction import load
@@ -215,6 +216,7 @@ def test_a_claims_verdict_is_derived_from_its_parts_and_each_has_a_direction():
     assert verdict_count(claims).count(",") == len(VERDICTS) - 1
 
 
+@pytest.mark.slow
 @needs_deep  # whether the DNN's runs are current is read from the DQN's code, which imports torch
 def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_path):
     from mediated_transfer.config.compose import CONF_DIR
@@ -236,6 +238,7 @@ def test_the_report_gives_a_verdict_on_each_claim_from_the_committed_runs(tmp_pa
     assert (CONF_DIR.parent / "reports" / "dqn_failure_ablation.md").is_file()
 
 
+@pytest.mark.slow
 @needs_deep
 def test_the_readmes_headline_is_the_one_the_committed_runs_give():
     from mediated_transfer.config.compose import CONF_DIR

@@ -124,6 +124,7 @@ FAULTS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fault", FAULTS)
 def test_reading_a_damaged_run_names_its_file_and_what_is_wrong(sweep, fault):
     root, _ = sweep

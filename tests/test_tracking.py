@@ -234,6 +234,7 @@ def _worker(args):
     return seed
 
 
+@pytest.mark.slow
 def test_parallel_workers_share_a_prepared_sqlite_store(tmp_path):
     uri = fresh_store(tmp_path)
     tracking.prepare(tracking.TrackingSettings(uri), "table_x")
@@ -326,6 +327,7 @@ def _prepare(args):
     return tracking.prepare(tracking.TrackingSettings(uri), name)
 
 
+@pytest.mark.slow
 def test_two_sweeps_starting_together_on_a_new_store_both_prepare_it(tmp_path):
     uri = f"sqlite:///{tmp_path / 'new' / 'mlflow.db'}"
     with multiprocessing.get_context("spawn").Pool(2) as pool:

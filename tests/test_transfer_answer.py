@@ -120,6 +120,7 @@ def test_the_command_names_a_missing_sweep_in_one_line(tmp_path):
         main(["--scale", "smoke", "--root", str(tmp_path)])
 
 
+@pytest.mark.slow
 def test_reproduction_and_readme_give_table_v_s_answer_only_when_every_run_is_in():
     from mediated_transfer.reporting.reproduction.open_question import OpenQuestion, headline, section
 

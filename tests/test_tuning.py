@@ -44,6 +44,7 @@ def _complete(space, root: Path) -> list:
     return _study(space, root).get_trials(states=(optuna.trial.TrialState.COMPLETE,))
 
 
+@pytest.mark.slow
 def test_search_stores_resumes_tracks_exports_and_builds_table1(space, tmp_path, capsys):
     fresh_store(tmp_path)  # <root>/mlflow.db, its tables already made (that takes seconds)
     assert tune(["rbf", *SMOKE, "--trials", "2", "--root", str(tmp_path)]) == 0
@@ -423,6 +424,7 @@ def test_a_trial_stops_once_its_reward_loss_so_far_exceeds_the_best_and_not_befo
     assert stop.value.record["seeds"] == [1000] and stop.value.record["reward_loss"] == [first]
 
 
+@pytest.mark.slow
 def test_a_stopped_trial_counts_toward_the_trials_and_shows_as_a_lower_bound(space, tmp_path, monkeypatch, capsys):
     # Every random trial meets a best of 0: it stops at its first evaluation point with loss.
     monkeypatch.setattr(study_module, "best_objective", lambda study: 0.0)

@@ -61,6 +61,7 @@ def test_a_bad_world_is_one_line(override, message):
         run_spec(compose_config(["scale=smoke", override]))
 
 
+@pytest.mark.slow
 def test_a_rake_runs_in_a_table_sweep_and_its_report(tmp_path):
     result = _sweep_and_report(tmp_path, "table2_rbf", "regular_1", "rake")
     assert result["config"]["env"]["_target_"] == "my_worlds.rake.RakeWorld"
@@ -69,12 +70,14 @@ def test_a_rake_runs_in_a_table_sweep_and_its_report(tmp_path):
     assert reports and "regular transfer" in reports[0].read_text(), sorted(tmp_path.glob("reports/**/*"))
 
 
+@pytest.mark.slow
 def test_a_world_with_an_extra_sensor_runs_in_a_table_sweep_and_its_report(tmp_path):
     result = _sweep_and_report(tmp_path, "table3_fsr", "none_0", "target_distance")
     assert result["config"]["env"]["_target_"] == "my_worlds.sensor.TargetDistanceWorld"
     assert len(result["mean_reward"]) == 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("world,policy", [("rake", "random"), ("target_distance", "scripted")])
 def test_animate_shows_a_plugin_world(tmp_path, world, policy):
     out = tmp_path / f"{world}.gif"

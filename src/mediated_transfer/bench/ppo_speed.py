@@ -48,7 +48,8 @@ ROUNDS = 3
 
 def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int):
     """The paper-scale run of ``overrides`` and its probe: ``rollouts`` timed rollouts of
-    ``rollout`` learning steps (None: the composed n_steps x n_envs), then half of one."""
+    ``rollout`` learning steps (None: the composed n_steps x n_envs), then half of one, and one
+    evaluation point of ``eval_episodes`` (0: the paper's)."""
     from ..config.compose import compose_config
     from ..config.spec import run_spec
 
@@ -57,7 +58,7 @@ def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episode
     paper = run_spec(cfg)
     # Marks at every rollout's end; the run stops half a rollout after the last timed one.
     budget = (rollouts + 1) * rollout + rollout // 2
-    return paper, replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes), rollout
+    return paper, replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes or paper.eval_episodes), rollout
 
 
 def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int) -> dict:
@@ -70,6 +71,7 @@ def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episod
     return {"steps_per_s": (last - first) / (marks[last] - marks[first]),
             "eval_s_per_point": result.wall_time_s - learn, "setup_s": total - result.wall_time_s,
             "paper_budget": paper.budget, "paper_eval_points": paper.eval_points,
+            "paper_eval_episodes": paper.eval_episodes,
             "source_phase_end": result.source_phase_end, "rollout": rollout}
 
 
@@ -94,8 +96,10 @@ def project_table(steps_per_s: float, eval_s_per_point: float, setup_s: float, r
 
 
 def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS, cores: int | None = None,
-        verbose: bool = True) -> dict:
-    """``steps``: learning steps timed per run (whole rollouts of 2,048; default 3 rollouts)."""
+        verbose: bool = True, eval_episodes: int | None = None) -> dict:
+    """``steps``: learning steps timed per run (whole rollouts of 2,048; default 3 rollouts);
+    ``eval_episodes``: episodes the evaluation point is timed over (default the paper's point),
+    scaled to the paper's point."""
     from .projection import table_rows
 
     rollouts = max(1, (steps or 3 * ROLLOUT) // ROLLOUT)
@@ -107,7 +111,9 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
               f"{rollouts} timed rollouts per K in {', '.join(map(str, ks))}...", flush=True)
     per_round: list[dict[int, dict]] = []
     as_run: list[dict] = []
-    evaluation = measure(1, 1, eval_episodes=100)  # one paper-sized evaluation point
+    evaluation = measure(1, 1, eval_episodes=eval_episodes or 0)  # 0: a paper-sized evaluation point
+    eval_s = evaluation["eval_s_per_point"] * evaluation["paper_eval_episodes"] / (
+        eval_episodes or evaluation["paper_eval_episodes"])
     for _ in range(rounds):
         per_round.append({k: measure(k, rollouts) for k in ks})
         as_run.append(measure_table5(rollouts))
@@ -123,15 +129,15 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
     for k in sorted({base, RECOMMENDED_K} & set(ks)):
         # K = 1's rate times K's ratio (taken pair by pair, it is the steadier figure under load).
         rate = result["by_k"][base]["steps_per_s"] * result["by_k"][k]["ratio_to_k1"]
-        projected[k] = project_table(rate, evaluation["eval_s_per_point"], setup,
+        projected[k] = project_table(rate, eval_s, setup,
                                      table_runs, cores, evaluation["paper_budget"],
                                      evaluation["paper_eval_points"])
     tuned_rate = statistics.median(r["steps_per_s"] for r in as_run)
     tuned_ratio = statistics.median(t["steps_per_s"] / r[base]["steps_per_s"] for t, r in zip(as_run, per_round))
     as_tuned = {"steps_per_s": tuned_rate, "ratio_to_k1": tuned_ratio, "rollout": as_run[0]["rollout"],
-                **project_table(result["by_k"][base]["steps_per_s"] * tuned_ratio, evaluation["eval_s_per_point"],
+                **project_table(result["by_k"][base]["steps_per_s"] * tuned_ratio, eval_s,
                                 setup, table_runs, cores, evaluation["paper_budget"], evaluation["paper_eval_points"])}
-    result.update({"eval_s_per_point": evaluation["eval_s_per_point"], "table_runs": table_runs,
+    result.update({"eval_s_per_point": eval_s, "table_runs": table_runs,
                    "recommended_k": RECOMMENDED_K, "table5": projected, "table5_as_run": as_tuned})
     if verbose:
         for k in ks:
