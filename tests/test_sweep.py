@@ -70,7 +70,6 @@ def _settings(root: Path) -> tracking.TrackingSettings:
     return tracking.TrackingSettings(f"sqlite:///{root / 'mlflow.db'}")
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("experiment", sorted(PAPER_TABLE))
 def test_experiment_runs_end_to_end_and_is_found_in_mlflow(root, source_cache, experiment):
     common = _common(root, source_cache)
@@ -98,7 +97,6 @@ def test_experiment_runs_end_to_end_and_is_found_in_mlflow(root, source_cache, e
     assert sorted(r.data.tags["cell"] for r in summaries) == sorted(r.cell for r in rows)
 
 
-@pytest.mark.slow
 def test_interrupted_sweep_completes_on_rerun_without_recomputing_or_duplicating(root, source_cache):
     args = ["experiment=table2_rbf", "cell=none_0,scaffolded_15", *_common(root, source_cache), "scale.seeds=2"]
     sweep_dir = root / "multirun" / "table2_rbf" / "smoke"
@@ -193,7 +191,6 @@ def test_a_sweep_over_named_worlds_gives_each_its_own_folder(root, source_cache)
     assert found["none_0/seed=0/env=tool_frame"]["move_frame"] == "tool"
 
 
-@pytest.mark.slow
 def test_submitit_local_launcher_runs_the_jobs(root, source_cache):
     result = subprocess.run(
         [sys.executable, "-m", "mediated_transfer", "experiment=table2_rbf", "hydra/launcher=submitit_local",
@@ -239,7 +236,6 @@ def test_a_result_of_other_code_is_reported_stale_and_recomputed_on_request(root
     assert stale(RunResult.read(folder)) is None  # recomputed by this code
 
 
-@pytest.mark.slow
 def test_a_variant_sweep_is_reported_apart_from_the_baseline_and_compared_with_it(root, source_cache, capsys):
     from mediated_transfer.reporting.compare import main as compare_main
 
@@ -355,7 +351,6 @@ def test_a_single_run_prints_its_current_reward(root, source_cache, capsys):
     assert lines and lines[-1].endswith("(0% solved) at step 200, ~0m00s left")
 
 
-@pytest.mark.slow
 def test_a_run_terminated_by_a_signal_ends_killed_in_mlflow(root, source_cache):
     """SIGTERM (a scheduler's kill or timeout) while a run computes: its MLflow run ends KILLED,
     with the points logged so far, and no result file is written."""
@@ -423,7 +418,6 @@ STOPS = {
 }
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc (Linux)")
 @pytest.mark.parametrize("stop", sorted(STOPS))
 def test_a_stopped_parallel_sweep_leaves_no_process_and_no_running_mlflow_run(root, source_cache, tmp_path, stop):
@@ -503,7 +497,6 @@ def test_a_run_interrupted_while_its_written_result_is_logged_ends_finished(root
     assert {a.path for a in _settings(root).client().list_artifacts(run.info.run_id)} >= {"result.json", "curve.csv"}
 
 
-@pytest.mark.slow
 def test_a_run_started_in_the_background_finishes_after_its_shell_exits(root, source_cache):
     """`nohup python -m mediated_transfer ... &` from a shell that exits while the run computes:
     the run is re-parented and goes on to the end (only a pool's worker watches its launcher)."""
@@ -603,7 +596,6 @@ assert os.access(migrations, os.R_OK | os.X_OK), migrations
 """
 
 
-@pytest.mark.slow
 def test_two_users_of_one_group_share_a_sweep_and_its_store():
     """A collaborator in the same group (umask 002) runs the same sweep, in the same folder and
     MLflow store, after the first: it finds the first's runs, computes its own, and the files a
