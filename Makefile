@@ -43,10 +43,10 @@ $(VENV)/.installed-py$(PYVER)-%: pyproject.toml constraints.txt | check-python
 install: $(STAMP) ## Create .venv and install the project (EXTRAS=deep,test; EXTRAS=test: no torch)
 
 test: $(FULL_STAMP) ## Run the whole test suite (creates .venv with everything first)
-	REQUIRE_DEEP=1 $(BIN)/python -m pytest -q -n auto
+	REQUIRE_DEEP=1 $(BIN)/python -m pytest -q -n auto --maxschedchunk=1
 
 test-no-torch: $(STAMP) ## The suite without torch: its tests skip (PYTHON=, EXTRAS=test, VENV= of its own)
-	$(BIN)/python -m pytest -q -n auto
+	$(BIN)/python -m pytest -q -n auto --maxschedchunk=1
 
 bench: $(STAMP) ## Print speed ratios: environment, linear learners, DQN vs Stable-Baselines3, PPO's environments
 	$(BIN)/python -m mediated_transfer.bench
