@@ -501,7 +501,7 @@ def test_a_run_started_in_the_background_finishes_after_its_shell_exits(root, so
     """`nohup python -m mediated_transfer ... &` from a shell that exits while the run computes:
     the run is re-parented and goes on to the end (only a pool's worker watches its launcher)."""
     command = " ".join([sys.executable, "-m", "mediated_transfer", "cell=none_0", "seed=0",
-                        *_common(root, source_cache), "scale.budget=200000", "scale.eval_points=40"])
+                        *_common(root, source_cache), "scale.budget=60000", "scale.eval_points=20"])
     shell = subprocess.Popen(["bash", "-c", f"{command} >/dev/null 2>&1 & echo $! && sleep 600"],
                              cwd=CONF_DIR.parent, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     run_pid = int(shell.stdout.readline())
@@ -511,6 +511,7 @@ def test_a_run_started_in_the_background_finishes_after_its_shell_exits(root, so
             time.sleep(0.5)
         shell.kill()  # the shell is gone while the run computes
         shell.wait()
+        assert not list((root / "runs").rglob("result.json")), "the run ended before its shell: a longer budget"
         deadline = time.time() + 300
         while time.time() < deadline:
             try:
@@ -526,7 +527,7 @@ def test_a_run_started_in_the_background_finishes_after_its_shell_exits(root, so
         except ProcessLookupError:
             pass
     [result] = (root / "runs").rglob("result.json")
-    assert RunResult.read(result.parent).steps[-1] == 200000
+    assert RunResult.read(result.parent).steps[-1] == 60000
     [run] = tracking.find_runs(_settings(root), "linear_q_rbf")
     assert run.info.status == "FINISHED"
 
