@@ -15,8 +15,9 @@ Table IV: 11 rows x 20 seeds at the paper's scale), each run ``setup + budget / 
 eval_points x (s per evaluation point) + job overhead``, divided by this machine's cores (one run
 per core). The evaluation point is timed once, after the first round's base run (100
 target-task episodes of a barely trained policy, which mostly run to their step limit: an upper
-bound). Beside the comparison, each round also times Table V as it runs (``experiment=table5_ppo``: Table I's tuned values, their
-environments and rollout), and the table is projected from that rate too.
+bound). Beside the comparison, each round also times Table V as it runs
+(``experiment=table5_ppo``: Table I's tuned values, their environments and rollout), and the
+table is projected from that rate too.
 """
 
 from __future__ import annotations
@@ -58,7 +59,8 @@ def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episode
     paper = run_spec(cfg)
     # Marks at every rollout's end; the run stops half a rollout after the last timed one.
     budget = (rollouts + 1) * rollout + rollout // 2
-    return paper, replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes or paper.eval_episodes), rollout
+    probe = replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes or paper.eval_episodes)
+    return paper, probe, rollout
 
 
 def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int) -> dict:
