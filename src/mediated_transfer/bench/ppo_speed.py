@@ -47,10 +47,10 @@ PROBE_SEED = 10_000
 ROUNDS = 3
 
 
-def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int):
+def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int | None):
     """The paper-scale run of ``overrides`` and its probe: ``rollouts`` timed rollouts of
     ``rollout`` learning steps (None: the composed n_steps x n_envs), then half of one, and one
-    evaluation point of ``eval_episodes`` (0: the paper's)."""
+    evaluation point of ``eval_episodes`` (None: the paper's)."""
     from ..config.compose import compose_config
     from ..config.spec import run_spec
 
@@ -63,7 +63,7 @@ def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episode
     return paper, probe, rollout
 
 
-def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int) -> dict:
+def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episodes: int | None) -> dict:
     """One short run: its learning steps/s over ``rollouts`` whole rollouts after the first, and
     the seconds of its one evaluation point."""
     paper, spec, rollout = _spec(overrides, rollout, rollouts, eval_episodes)
@@ -73,11 +73,11 @@ def _timed(overrides: list[str], rollout: int | None, rollouts: int, eval_episod
     return {"steps_per_s": (last - first) / (marks[last] - marks[first]),
             "eval_s_per_point": result.wall_time_s - learn, "setup_s": total - result.wall_time_s,
             "paper_budget": paper.budget, "paper_eval_points": paper.eval_points,
-            "paper_eval_episodes": paper.eval_episodes,
+            "eval_episodes": spec.eval_episodes, "paper_eval_episodes": paper.eval_episodes,
             "source_phase_end": result.source_phase_end, "rollout": rollout}
 
 
-def measure(n_envs: int, rollouts: int, eval_episodes: int = 1) -> dict:
+def measure(n_envs: int, rollouts: int, eval_episodes: int | None = 1) -> dict:
     """One short run with ``n_envs`` environments on the provisional values, the rollout held at
     SB3's 2,048 learning steps."""
     overrides = [f"experiment={TABLE}", "algorithm=sb3_ppo", "tuned=provisional",
@@ -115,14 +115,13 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
     as_run: list[dict] = []
     base = ks[0]
     for i in range(rounds):
-        # The first round's base run also times the evaluation point (0: the paper's episodes);
-        # the rate is timed over rollouts, before it.
-        per_round.append({k: measure(k, rollouts, eval_episodes=(eval_episodes or 0) if (i, k) == (0, base) else 1)
+        # The first round's base run also times the evaluation point; the rate is timed over
+        # rollouts, before it.
+        per_round.append({k: measure(k, rollouts, eval_episodes=eval_episodes if (i, k) == (0, base) else 1)
                           for k in ks})
         as_run.append(measure_table5(rollouts))
     evaluation = per_round[0][base]
-    eval_s = evaluation["eval_s_per_point"] * evaluation["paper_eval_episodes"] / (
-        eval_episodes or evaluation["paper_eval_episodes"])
+    eval_s = evaluation["eval_s_per_point"] * evaluation["paper_eval_episodes"] / evaluation["eval_episodes"]
     result: dict = {"cores": cores, "rollout": ROLLOUT, "cell": CELL, "rounds": rounds, "by_k": {}}
     for k in ks:
         rates = [r[k]["steps_per_s"] for r in per_round]
