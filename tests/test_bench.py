@@ -73,6 +73,16 @@ def test_the_ppo_table_projection_adds_setup_learning_evaluation_and_the_jobs_ov
     assert p["wall_hours"] == pytest.approx(220 * run_s / 2 / 3600)
 
 
+@pytest.mark.parametrize("episodes", [0, -3])
+def test_the_ppo_bench_refuses_an_evaluation_point_of_no_episodes_before_any_run(episodes, monkeypatch):
+    from mediated_transfer.bench import ppo_speed
+
+    # Fails the test if a run starts: the refusal must come first.
+    monkeypatch.setattr(ppo_speed, "measure", lambda *a, **k: pytest.fail("a run started"))
+    with pytest.raises(ValueError, match=f"eval_episodes .*got {episodes}"):
+        ppo_speed.run(eval_episodes=episodes, verbose=False)
+
+
 @pytest.mark.slow
 def test_the_ppo_bench_times_k_environments_against_one_in_one_run():
     pytest.importorskip("stable_baselines3")

@@ -10,6 +10,7 @@ import pytest
 
 from mediated_transfer.metrics import reward_loss, time_to_threshold
 from mediated_transfer.reporting.collect import CellRuns
+from mediated_transfer.reporting.intervals import format_interval
 from mediated_transfer.reporting.tables import TableHeader, table_rows, write_tables
 from mediated_transfer.reporting.transfer_answer import Registered, answer, main, measure, outcome_words
 from mediated_transfer.reporting.verdicts import ABSENT, HOLDS, OTHER_WAY, UNDECIDED
@@ -65,6 +66,35 @@ def test_transfer_helps_when_a_best_row_lies_below_one_and_the_split_says_why():
     assert m.finished == 220 and not m.failed
 
 
+def test_the_typical_run_and_the_source_phase_are_reported_beside_the_rule_and_decide_nothing():
+    from dataclasses import replace
+
+    from mediated_transfer.reporting.reproduction.open_question import OpenQuestion, headline
+
+    # Without transfer 11 runs learn at 60k and 9 never: a high mean, a low median. With regular_50
+    # every run learns at 140k, after a source phase of 30k: a lower mean, a higher median (the other
+    # rows at 160k).
+    reached = {c: [160_000] * 20 for c in CELLS[1:]} | {"none_0": [60_000] * 11 + [None] * 9,
+                                                        "regular_50": [140_000] * 20}
+    cells = _cells(reached)
+    cells["regular_50"] = CellRuns("regular", 50, [replace(r, source_phase_end=30_000 + r.seed)
+                                                   for r in cells["regular_50"].results])
+    m = measure(REGISTERED, cells)
+    row = next(r for r in m.rows if r.cell == "regular_50")
+    assert row.outcome == HOLDS and row.loss_ratio[2] < 1  # the rule: the mean's interval below 1
+    assert row.median_ratio[0] > 1  # the typical run learns later
+    split = {s.cell: s for s in m.splits}
+    assert split["regular_50"].source_phase == 30_009.5 and split["none_0"].source_phase is None
+    assert list(m.losses) == CELLS and len(m.losses["none_0"]) == 20
+    line = headline(OpenQuestion(REGISTERED, m))
+    assert line.startswith("**Beyond the paper: does transfer help PPO?** (Table V, registered before its runs): "
+                           "transfer helps PPO: regular transfer (best N_source = 50")
+    assert "regular_50: the source phase ends at 30k (median), the median run discovers the target reward at 100k" in line
+    assert line.endswith(f"Outside the rule (added after the runs; it decides nothing), the ratio of median L_R: "
+                         f"regular_50 {format_interval(row.median_ratio)}; scaffolded_1 "
+                         f"{format_interval(m.best['scaffolded'].median_ratio)}.")
+
+
 def test_transfer_does_not_help_when_no_row_lies_below_one():
     reached = {c: [100_000] * 20 for c in CELLS} | {"regular_1": [160_000] * 20}
     m = measure(REGISTERED, _cells(reached))
@@ -112,7 +142,8 @@ def test_the_command_answers_for_the_committed_dqn_table_and_says_it_is_a_cross_
     text = out.read_text()
     assert "**Answer (cross-check):** transfer helps the DQN" in text
     assert "for which they were not registered" in text and (tmp_path / "answer.png").is_file()
-    assert "| none_0 | 20 | 20 |" in text  # every DQN run discovers the target's reward
+    assert "| none_0 | 20 | - | 20 |" in text  # every DQN run discovers the target's reward, no source phase
+    assert "## Outside the rule: the typical run" in text and "| none_0 | " in text.split("## Outside the rule")[1]
 
 
 def test_the_command_names_a_missing_sweep_in_one_line(tmp_path):

@@ -59,7 +59,7 @@ def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episode
     paper = run_spec(cfg)
     # Marks at every rollout's end; the run stops half a rollout after the last timed one.
     budget = (rollouts + 1) * rollout + rollout // 2
-    probe = replace(paper, budget=budget, eval_points=1, eval_episodes=eval_episodes or paper.eval_episodes)
+    probe = replace(paper, budget=budget, eval_points=1, eval_episodes=paper.eval_episodes if eval_episodes is None else eval_episodes)
     return paper, probe, rollout
 
 
@@ -104,6 +104,9 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
     scaled to the paper's point."""
     from .projection import table_rows
 
+    # 0 episodes would time nothing and divide by zero when scaled to the paper's point.
+    if eval_episodes is not None and eval_episodes < 1:
+        raise ValueError(f"eval_episodes must be a positive number of episodes, or None for the paper's; got {eval_episodes}")
     rollouts = max(1, (steps or 3 * ROLLOUT) // ROLLOUT)
     cores = cores or len(os.sched_getaffinity(0))
     cells, seeds = table_rows(TABLE)
@@ -148,7 +151,7 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
             r = result["by_k"][k]
             print(f"  n_envs={k:>2}: {r['steps_per_s']:,.0f} learning steps/s, x{r['ratio_to_k1']:.2f} vs n_envs={base} "
                   f"(per round: {', '.join(f'{x:.2f}' for x in r['ratios'])})", flush=True)
-        print(f"  an evaluation point (100 episodes): {evaluation['eval_s_per_point']:.1f} s", flush=True)
+        print(f"  an evaluation point ({evaluation['paper_eval_episodes']} episodes): {eval_s:.1f} s", flush=True)
         for k, p in projected.items():
             print(f"  Table V ({table_runs} paper-scale runs) with n_envs={k}: a run ~{p['run_s']:.0f} s -> "
                   f"{p['cpu_hours']:.1f} CPU-h, {p['wall_hours']:.1f} h on {cores} cores", flush=True)

@@ -14,7 +14,12 @@ rule before its first run). This module applies that rule and nothing else:
 
 Beside the rule, as registered: the ratio of median per-run times to threshold, the runs that
 never learn, and the discovery / learning split (the first rewarded target episode; from there to
-the first <R> >= 8), medians with intervals, a run that never gets there counted as slower.
+the first <R> >= 8), medians with intervals, a run that never gets there counted as slower, with
+each row's median source phase (discovery's steps include it).
+
+Outside the rule, added after Table V's runs were in and deciding nothing: the ratio of median
+L_R (does the typical run learn sooner, or only the slowest runs?) and every run's L_R drawn per
+row, since a mean over runs that never learn (L_R near 250 each) can move without the median.
 ``--experiment table4_dnn`` applies the same rule to the DQN's table (not registered there:
 a cross-check of the machinery on a learner the paper did study).
 """
@@ -84,6 +89,8 @@ class RowAnswer:
     loss_sem: float
     loss_ratio: tuple[float, float, float]
     time_ratio: tuple[float, float, float]
+    median_ratio: tuple[float, float, float]
+    """Median L_R over none_0's, with its interval: outside the rule."""
     never_learn: int
     outcome: str
     """R1 on loss_ratio, the claim's side below 1."""
@@ -104,6 +111,8 @@ class SplitRow:
     learned: int
     discovery: tuple[float, float, float]
     learning: tuple[float, float, float]
+    source_phase: float | None
+    """The median step at which the source phase ended (None without one): discovery counts it."""
 
 
 @dataclass(frozen=True)
@@ -114,6 +123,8 @@ class Measures:
     rows: list[RowAnswer]
     best: dict[str, RowAnswer]
     splits: list[SplitRow]
+    losses: dict[str, np.ndarray]
+    """Every run's L_R per row, none_0 included, in the registered order."""
     finished: int
     failed: list[RunResult]
 
@@ -151,7 +162,7 @@ def infinite_if_none(values: list[int | None]) -> np.ndarray:
 
 def measure(registered: Registered, cells: dict[str, CellRuns]) -> Measures:
     reference = cells.get(REFERENCE)
-    rows, splits = [], []
+    rows, splits, losses_by_cell = [], [], {}
     threshold = MetricsConfig().threshold
     for cell in registered.cells:
         runs = cells[cell].results if cell in cells else []
@@ -159,42 +170,58 @@ def measure(registered: Registered, cells: dict[str, CellRuns]) -> Measures:
             continue
         discovery = infinite_if_none([r.first_target_reward_step for r in runs])
         learning = infinite_if_none([r.learning_span(threshold) for r in runs])
+        switches = [r.source_phase_end for r in runs if r.source_phase_end is not None]
         splits.append(SplitRow(cell, len(runs), int(np.isfinite(discovery).sum()), int(np.isfinite(learning).sum()),
-                               median_interval(discovery), median_interval(learning)))
+                               median_interval(discovery), median_interval(learning),
+                               float(np.median(switches)) if switches else None))
+        losses = losses_by_cell[cell] = np.array([r.reward_loss for r in runs])
         if cell == REFERENCE or reference is None or not reference.results:
             continue
-        losses = np.array([r.reward_loss for r in runs])
-        loss_ratio = ratio_of_means(losses, [r.reward_loss for r in reference.results])
+        without = [r.reward_loss for r in reference.results]
+        loss_ratio = ratio_of_means(losses, without)
         time_ratio = ratio_of_medians(infinite_if_none([r.time_to_threshold for r in runs]),
                                       infinite_if_none([r.time_to_threshold for r in reference.results]))
         rows.append(RowAnswer(cell, cells[cell].strategy, cells[cell].n_source, len(runs), float(losses.mean()),
-                              sem(losses), loss_ratio, time_ratio, sum(map(never_learns, runs)),
-                              direction(loss_ratio, BELOW)))
+                              sem(losses), loss_ratio, time_ratio, ratio_of_medians(losses, without),
+                              sum(map(never_learns, runs)), direction(loss_ratio, BELOW)))
     best = {}
     for strategy in STRATEGIES:
         own = [r for r in rows if r.strategy == strategy]
         if own:
             best[strategy] = min(own, key=lambda r: r.loss_mean)
     algorithm = next((r.algorithm for c in cells.values() for r in c.results), "")
-    return Measures(registered, LEARNERS.get(algorithm, algorithm), reference, rows, best, splits,
+    return Measures(registered, LEARNERS.get(algorithm, algorithm), reference, rows, best, splits, losses_by_cell,
                     sum(len(c.results) for c in cells.values()), [r for c in cells.values() for r in c.failed])
 
 
 def plot(measures: Measures, path: Path) -> Path:
-    """Each transfer row's L_R ratio with its interval, the line of no difference at 1."""
+    """Left, the rule: each transfer row's L_R ratio with its interval, the line of no difference
+    at 1. Right, outside it: every run's L_R per row, where a mean's move shows its runs."""
     plt = _pyplot()
-    rows = measures.rows
-    fig, ax = plt.subplots(figsize=(6.4, 0.38 * len(rows) + 1.6))
+    cells = list(measures.losses)  # one row per cell, none_0 first, on both panels
+    at = {cell: i for i, cell in enumerate(cells)}
+    fig, (ax, runs_ax) = plt.subplots(1, 2, sharey=True, figsize=(11.0, 0.38 * len(cells) + 1.6))
     colours = {HOLDS: "tab:green", OTHER_WAY: "tab:red"}
-    for i, row in enumerate(rows):
+    for row in measures.rows:
         point, low, high = row.loss_ratio
-        ax.plot([low, min(high, 10.0)], [i, i], color=colours.get(row.outcome, "tab:gray"), lw=2)
-        ax.plot([point], [i], "o", color=colours.get(row.outcome, "tab:gray"))
+        colour, i = colours.get(row.outcome, "tab:gray"), at[row.cell]
+        ax.plot([low, min(high, 10.0)], [i, i], color=colour, lw=2)
+        ax.plot([point], [i], "o", color=colour)
     ax.axvline(1.0, color="black", ls="--", lw=1)
-    ax.set_yticks(range(len(rows)), [r.cell for r in rows])
+    if REFERENCE in at:
+        ax.text(1.0, at[REFERENCE], " the reference", va="center", fontsize=8)
+    ax.set_yticks(range(len(cells)), cells)
     ax.invert_yaxis()
     ax.set_xlabel("L_R with transfer / without (95 % bootstrap interval); < 1: transfer helps")
     ax.set_title(f"Does transfer help {measures.learner}? ({measures.registered.experiment})", fontsize=10)
+    jitter = np.random.default_rng(0)  # seeded: the same runs draw the same picture
+    for cell, losses in measures.losses.items():
+        i = at[cell]
+        runs_ax.plot(losses, i + jitter.uniform(-0.18, 0.18, len(losses)), "o", ms=3.5, alpha=0.6,
+                     color="tab:blue" if cell == REFERENCE else "tab:gray")
+        runs_ax.plot([np.median(losses)] * 2, [i - 0.3, i + 0.3], color="black", lw=1.5)
+    runs_ax.set_xlabel("L_R per run (bar: median); outside the rule")
+    runs_ax.set_title("Every run", fontsize=10)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
@@ -239,16 +266,33 @@ def render(measures: Measures, figure: str | None, scale: str) -> str:
                      f"{format_interval(row.loss_ratio)} | {format_interval(row.time_ratio)} | "
                      f"{row.never_learn} | {row.words} |")
     if figure:
-        lines += ["", f"![L_R ratio per transfer row with its interval]({figure})"]
+        lines += ["", f"![L_R ratio per transfer row with its interval; every run's L_R per row]({figure})"]
     lines += ["", "## Discovery and learning", "",
               "Discovery: the learning step of the first rewarded target-task episode. Learning: from there "
               "to the first evaluation point with <R> >= 8. Medians over runs with 95 % bootstrap intervals; "
               "a run that never gets there counts as slower than any that does ('never').", "",
-              "| row | runs | discover | discovery | learn | learning |", "|---|---:|---:|---|---:|---|"]
+              "Discovery counts the source phase's learning steps, whose median end is given.", "",
+              "| row | runs | source phase ends | discover | discovery | learn | learning |",
+              "|---|---:|---:|---:|---|---:|---|"]
     for split in measures.splits:
-        lines.append(f"| {split.cell} | {split.runs} | {split.discovered} | {_steps(split.discovery)} | "
+        phase = "-" if split.source_phase is None else _phase_steps(split.source_phase)
+        lines.append(f"| {split.cell} | {split.runs} | {phase} | {split.discovered} | {_steps(split.discovery)} | "
                      f"{split.learned} | {_steps(split.learning)} |")
+    lines += ["", "## Outside the rule: the typical run", "",
+              "Added after the runs were in; it decides nothing. The rule compares mean L_R, which runs that "
+              "learn late or never (L_R up to 250) weigh heavily; the ratio of median L_R asks whether the "
+              "typical run learns sooner. 95 % bootstrap intervals as above; every run's L_R is drawn on the "
+              "right of the figure.", "",
+              "| row | L_R median | median L_R ratio to none_0 [95 % CI] |", "|---|---:|---|",
+              f"| {REFERENCE} | {np.median(ref):.1f} | - |"]
+    for row in measures.rows:
+        lines.append(f"| {row.cell} | {np.median(measures.losses[row.cell]):.1f} | {format_interval(row.median_ratio)} |")
     return "\n".join(lines + [""])
+
+
+def _phase_steps(steps: float) -> str:
+    """A source phase's end: '33k', or the steps themselves below 1k (one source task, soon solved)."""
+    return steps_k(steps) if steps >= 1000 else f"{steps:.0f}"
 
 
 def _steps(interval: tuple[float, float, float]) -> str:

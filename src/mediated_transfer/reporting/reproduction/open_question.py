@@ -53,10 +53,24 @@ class OpenQuestion:
             return ""
         splits = {s.cell: s for s in self.measures.splits}
         wanted = [registered_answer.REFERENCE, *(row.cell for row in self.measures.best.values())]
-        parts = [f"{s.cell}: {_median_run(s.discovery[0], 'discovers the target reward at')}, then "
-                 f"{_median_run(s.learning[0], 'learns the pull in', ' more')} ({s.learned} of {s.runs} runs learn it)"
+        parts = [f"{s.cell}: {_source_phase(s.source_phase)}{_median_run(s.discovery[0], 'discovers the target reward at')}, "
+                 f"then {_median_run(s.learning[0], 'learns the pull in', ' more')} ({s.learned} of {s.runs} runs learn it)"
                  for s in (splits[c] for c in wanted if c in splits)]
         return ("Medians over runs: " + "; ".join(parts) + ".") if parts else ""
+
+    def typical_run(self) -> str:
+        """Outside the rule (added after the runs; it decides nothing): the ratio of median L_R of each
+        strategy's best row, whether the typical run gains or only the slowest runs."""
+        if not self.complete or not self.measures.rows:
+            return ""
+        parts = [f"{row.cell} {format_interval(row.median_ratio)}" for row in self.measures.best.values()]
+        return ("Outside the rule (added after the runs; it decides nothing), the ratio of median L_R: "
+                + "; ".join(parts) + ".")
+
+
+def _source_phase(steps: float | None) -> str:
+    """'the source phase ends at 33k (median), ' for a row with one: discovery's steps include it."""
+    return "" if steps is None else f"the source phase ends at {steps_k(steps)} (median), "
 
 
 def _median_run(steps: float, verb: str, tail: str = "") -> str:
@@ -85,7 +99,7 @@ def section(question: OpenQuestion) -> list[str]:
     if question.complete and question.measures.rows:
         lines += ["", *[f"- {row.cell} (best of {row.strategy}): L_R ratio {format_interval(row.loss_ratio)}: "
                         f"{row.words}." for row in question.measures.best.values()]]
-        lines += ["", question.split(), "",
+        lines += ["", question.split(), "", question.typical_run(), "",
                   f"Every row, its interval and the split with intervals: [{experiment}_answer.md]({experiment}_answer.md)."]
     return lines
 
@@ -93,5 +107,4 @@ def section(question: OpenQuestion) -> list[str]:
 def headline(question: OpenQuestion) -> str:
     """The README headline's line on the open question."""
     line = f"**Beyond the paper: does transfer help PPO?** (Table V, registered before its runs): {question.status()}."
-    split = question.split()
-    return f"{line} {split}" if split else line
+    return " ".join(part for part in (line, question.split(), question.typical_run()) if part)
