@@ -283,11 +283,16 @@ def render(measures: Measures, figure: str | None, scale: str) -> str:
               "learn late or never (L_R up to 250) weigh heavily; the ratio of median L_R asks whether the "
               "typical run learns sooner. 95 % bootstrap intervals as above; every run's L_R is drawn on the "
               "right of the figure.", "",
-              "| row | L_R median | median L_R ratio to none_0 [95 % CI] |", "|---|---:|---|",
-              f"| {REFERENCE} | {np.median(ref):.1f} | - |"]
+              "| row | L_R median | L_R range over runs | median L_R ratio to none_0 [95 % CI] |",
+              "|---|---:|---:|---|", f"| {REFERENCE} | {np.median(ref):.1f} | {_range(ref)} | - |"]
     for row in measures.rows:
-        lines.append(f"| {row.cell} | {np.median(measures.losses[row.cell]):.1f} | {format_interval(row.median_ratio)} |")
+        losses = measures.losses[row.cell]
+        lines.append(f"| {row.cell} | {np.median(losses):.1f} | {_range(losses)} | {format_interval(row.median_ratio)} |")
     return "\n".join(lines + [""])
+
+
+def _range(losses: np.ndarray) -> str:
+    return f"{losses.min():.1f}-{losses.max():.1f}"
 
 
 def _phase_steps(steps: float) -> str:
