@@ -59,7 +59,8 @@ def _spec(overrides: list[str], rollout: int | None, rollouts: int, eval_episode
     paper = run_spec(cfg)
     # Marks at every rollout's end; the run stops half a rollout after the last timed one.
     budget = (rollouts + 1) * rollout + rollout // 2
-    probe = replace(paper, budget=budget, eval_points=1, eval_episodes=paper.eval_episodes if eval_episodes is None else eval_episodes)
+    episodes = paper.eval_episodes if eval_episodes is None else eval_episodes
+    probe = replace(paper, budget=budget, eval_points=1, eval_episodes=episodes)
     return paper, probe, rollout
 
 
@@ -106,7 +107,8 @@ def run(steps: int | None = None, ks: tuple[int, ...] = KS, rounds: int = ROUNDS
 
     # 0 episodes would time nothing and divide by zero when scaled to the paper's point.
     if eval_episodes is not None and eval_episodes < 1:
-        raise ValueError(f"eval_episodes must be a positive number of episodes, or None for the paper's; got {eval_episodes}")
+        raise ValueError("eval_episodes must be a positive number of episodes, or None for the paper's; "
+                         f"got {eval_episodes}")
     rollouts = max(1, (steps or 3 * ROLLOUT) // ROLLOUT)
     cores = cores or len(os.sched_getaffinity(0))
     cells, seeds = table_rows(TABLE)

@@ -164,6 +164,10 @@ def measure(registered: Registered, cells: dict[str, CellRuns]) -> Measures:
     reference = cells.get(REFERENCE)
     rows, splits, losses_by_cell = [], [], {}
     threshold = MetricsConfig().threshold
+    compared = reference is not None and bool(reference.results)
+    if compared:  # what every transfer row is compared with
+        without = [r.reward_loss for r in reference.results]
+        without_times = infinite_if_none([r.time_to_threshold for r in reference.results])
     for cell in registered.cells:
         runs = cells[cell].results if cell in cells else []
         if not runs:
@@ -175,12 +179,10 @@ def measure(registered: Registered, cells: dict[str, CellRuns]) -> Measures:
                                median_interval(discovery), median_interval(learning),
                                float(np.median(switches)) if switches else None))
         losses = losses_by_cell[cell] = np.array([r.reward_loss for r in runs])
-        if cell == REFERENCE or reference is None or not reference.results:
+        if cell == REFERENCE or not compared:
             continue
-        without = [r.reward_loss for r in reference.results]
         loss_ratio = ratio_of_means(losses, without)
-        time_ratio = ratio_of_medians(infinite_if_none([r.time_to_threshold for r in runs]),
-                                      infinite_if_none([r.time_to_threshold for r in reference.results]))
+        time_ratio = ratio_of_medians(infinite_if_none([r.time_to_threshold for r in runs]), without_times)
         rows.append(RowAnswer(cell, cells[cell].strategy, cells[cell].n_source, len(runs), float(losses.mean()),
                               sem(losses), loss_ratio, time_ratio, ratio_of_medians(losses, without),
                               sum(map(never_learns, runs)), direction(loss_ratio, BELOW)))
@@ -275,7 +277,7 @@ def render(measures: Measures, figure: str | None, scale: str) -> str:
               "| row | runs | source phase ends | discover | discovery | learn | learning |",
               "|---|---:|---:|---:|---|---:|---|"]
     for split in measures.splits:
-        phase = "-" if split.source_phase is None else _phase_steps(split.source_phase)
+        phase = "-" if split.source_phase is None else phase_steps(split.source_phase)
         lines.append(f"| {split.cell} | {split.runs} | {phase} | {split.discovered} | {_steps(split.discovery)} | "
                      f"{split.learned} | {_steps(split.learning)} |")
     lines += ["", "## Outside the rule: the typical run", "",
@@ -295,7 +297,7 @@ def _range(losses: np.ndarray) -> str:
     return f"{losses.min():.1f}-{losses.max():.1f}"
 
 
-def _phase_steps(steps: float) -> str:
+def phase_steps(steps: float) -> str:
     """A source phase's end: '33k', or the steps themselves below 1k (one source task, soon solved)."""
     return steps_k(steps) if steps >= 1000 else f"{steps:.0f}"
 

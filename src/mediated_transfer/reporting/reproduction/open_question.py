@@ -70,7 +70,7 @@ class OpenQuestion:
 
 def _source_phase(steps: float | None) -> str:
     """'the source phase ends at 33k (median), ' for a row with one: discovery's steps include it."""
-    return "" if steps is None else f"the source phase ends at {steps_k(steps)} (median), "
+    return "" if steps is None else f"the source phase ends at {registered_answer.phase_steps(steps)} (median), "
 
 
 def _median_run(steps: float, verb: str, tail: str = "") -> str:
