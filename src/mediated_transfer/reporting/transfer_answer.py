@@ -183,9 +183,10 @@ def measure(registered: Registered, cells: dict[str, CellRuns]) -> Measures:
             continue
         loss_ratio = ratio_of_means(losses, without)
         time_ratio = ratio_of_medians(infinite_if_none([r.time_to_threshold for r in runs]), without_times)
-        rows.append(RowAnswer(cell, cells[cell].strategy, cells[cell].n_source, len(runs), float(losses.mean()),
-                              sem(losses), loss_ratio, time_ratio, ratio_of_medians(losses, without),
-                              sum(map(never_learns, runs)), direction(loss_ratio, BELOW)))
+        rows.append(RowAnswer(cell=cell, strategy=cells[cell].strategy, n_source=cells[cell].n_source, runs=len(runs),
+                              loss_mean=float(losses.mean()), loss_sem=sem(losses), loss_ratio=loss_ratio,
+                              time_ratio=time_ratio, median_ratio=ratio_of_medians(losses, without),
+                              never_learn=sum(map(never_learns, runs)), outcome=direction(loss_ratio, BELOW)))
     best = {}
     for strategy in STRATEGIES:
         own = [r for r in rows if r.strategy == strategy]
